@@ -1,0 +1,26 @@
+/* The `morsegs` command line: one entry point per subcommand, each in its own file
+ * (cmd_<name>.c), and the benchmarks of `morsegs bench NAME` (bench_<name>.c). Every
+ * command returns a process exit code: 0 success, 1 runtime error (message printed),
+ * 2 usage error. */
+#ifndef MGS_CLI_H
+#define MGS_CLI_H
+#include "core/mgs_error.h"
+
+int mgs_cmd_demo(int argc, char **argv);
+int mgs_cmd_scene(int argc, char **argv);
+int mgs_cmd_train(int argc, char **argv);
+int mgs_cmd_render(int argc, char **argv);
+int mgs_cmd_eval(int argc, char **argv);
+int mgs_cmd_vdb(int argc, char **argv);
+int mgs_cmd_persistence(int argc, char **argv);
+int mgs_cmd_bench(int argc, char **argv);
+
+int mgs_bench_scene(int argc, char **argv);
+int mgs_bench_raster(int argc, char **argv);
+int mgs_bench_train(int argc, char **argv);
+int mgs_bench_vdb(int argc, char **argv);
+int mgs_bench_topo(int argc, char **argv);
+
+/* Prints "morsegs <cmd>: <message>" to stderr and returns 1 (for `return mgs_cli_fail(...)`). */
+int mgs_cli_fail(const char *cmd, const mgs_error *err);
+#endif

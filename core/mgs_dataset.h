@@ -1,0 +1,62 @@
+/* Multi-view datasets: NeRF-synthetic (transforms_{train,val,test}.json), nerfstudio
+ * (transforms.json) and COLMAP (sparse/0/{cameras,images,points3D}.{bin,txt} + images/),
+ * detected from the folder's content. Every loader fills the same structure, with
+ * cameras in the internal OpenCV convention (core/mgs_camera.h), so the rest of the
+ * system never sees the format. */
+#ifndef MGS_DATASET_H
+#define MGS_DATASET_H
+#include <stddef.h>
+#include "core/mgs_error.h"
+#include "core/mgs_camera.h"
+#include "core/mgs_image.h"
+#include "core/mgs_ply.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { MGS_DATASET_AUTO = 0, MGS_DATASET_NERF_SYNTHETIC, MGS_DATASET_NERFSTUDIO, MGS_DATASET_COLMAP } mgs_dataset_format;
+typedef enum { MGS_SPLIT_TRAIN = 0, MGS_SPLIT_VAL, MGS_SPLIT_TEST, MGS_SPLIT_COUNT } mgs_split;
+
+typedef struct mgs_view {
+  char *name;        /* file stem, e.g. "r_0" */
+  char *image_path;  /* absolute or relative to the working directory */
+  mgs_camera cam;    /* intrinsics already scaled by the downscale factor */
+  mgs_image *image;  /* RGB composited on the background, downscaled; NULL until loaded */
+  mgs_image *alpha;  /* 1-channel alpha when the file had one (else NULL) */
+} mgs_view;
+
+typedef struct mgs_dataset_options {
+  mgs_dataset_format format; /* AUTO detects */
+  int downscale;             /* integer factor >= 1 */
+  int white_background;      /* 1 white (NeRF-synthetic default), 0 black */
+  int load_images;           /* 1: read all images now (and check their sizes) */
+  int test_every;            /* COLMAP / nerfstudio without splits: every Nth view is test (8) */
+} mgs_dataset_options;
+
+typedef struct mgs_dataset {
+  mgs_dataset_format format;
+  char *root;
+  mgs_view *views[MGS_SPLIT_COUNT];
+  size_t n_views[MGS_SPLIT_COUNT];
+  mgs_point_cloud *init_points; /* COLMAP points3D, nerfstudio ply_file_path, or points3d.ply
+                                   beside a NeRF-synthetic dataset; NULL if none */
+  char *mesh_path;              /* ground-truth mesh if the dataset has one (gt_mesh.ply) */
+  float background[3];
+  /* Scene normalization of the reference: centre of the camera centres and the radius
+     (1.1 x the largest distance to it) used for learning rates and densification. */
+  double center[3];
+  double extent;
+} mgs_dataset;
+
+void mgs_dataset_options_default(mgs_dataset_options *o);
+mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *o, mgs_dataset **out, mgs_error *err);
+/* Loads one view's image if not yet loaded (checks its size against the camera). */
+mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err);
+void mgs_dataset_destroy(mgs_dataset *d);
+const char *mgs_split_name(mgs_split s); /* "train", "val", "test" */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

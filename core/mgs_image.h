@@ -1,0 +1,36 @@
+/* Float images (values as stored, 0..1 for 8-bit files; no colour-space conversion, as
+ * the reference 3DGS trains on the stored sRGB values) and their I/O through OpenImageIO
+ * (PNG, JPEG, EXR, anything OIIO reads). Pixels are interleaved, row-major, top row
+ * first: data[(y*width + x)*channels + c]. */
+#ifndef MGS_IMAGE_H
+#define MGS_IMAGE_H
+#include "core/mgs_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_image {
+  int width, height, channels;
+  float *data;
+} mgs_image;
+
+mgs_image *mgs_image_create(int width, int height, int channels); /* zero-filled */
+void mgs_image_destroy(mgs_image *img);
+mgs_image *mgs_image_clone(const mgs_image *img);
+
+/* Reads any format OIIO knows. Errors name the file. */
+mgs_status mgs_image_read(const char *path, mgs_image **out, mgs_error *err);
+/* Writes by extension (.png/.jpg: 8-bit clamped; .exr: half/float). Atomic: writes a
+ * temporary file beside `path` and renames it. */
+mgs_status mgs_image_write(const char *path, const mgs_image *img, mgs_error *err);
+
+/* RGBA -> RGB composited over background bg (straight alpha). */
+mgs_image *mgs_image_composite(const mgs_image *rgba, const float bg[3]);
+/* Box-filter downscale by an integer factor (area average). */
+mgs_image *mgs_image_downscale(const mgs_image *img, int factor);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,37 @@
+/* Triangle meshes: read (OBJ, PLY, OFF, anything assimp reads, triangulated, merged into
+ * one vertex/index list), write (PLY binary or OBJ by extension, atomically), normalize
+ * and measure. */
+#ifndef MGS_MESH_H
+#define MGS_MESH_H
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mgs_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_mesh {
+  size_t nv, nt;
+  float *v;      /* nv*3 positions */
+  uint32_t *t;   /* nt*3 vertex indices, counter-clockwise = outward */
+} mgs_mesh;
+
+mgs_mesh *mgs_mesh_create(size_t nv, size_t nt);
+void mgs_mesh_destroy(mgs_mesh *m);
+/* Fails (MGS_ERR_FORMAT, naming the file) on an empty mesh, indices out of range or
+ * non-finite vertices. */
+mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err);
+mgs_status mgs_mesh_write(const char *path, const mgs_mesh *m, mgs_error *err);
+void mgs_mesh_bounds(const mgs_mesh *m, double lo[3], double hi[3]);
+/* Translate/scale so the bounding box is centred at the origin and its largest side is
+ * `size`; returns the scale applied, centre in `center_out` (may be NULL). */
+double mgs_mesh_normalize(mgs_mesh *m, double size, double center_out[3]);
+double mgs_mesh_area(const mgs_mesh *m);
+/* Edges used by other than exactly two triangles (0 for a closed 2-manifold). */
+size_t mgs_mesh_count_boundary_or_nonmanifold_edges(const mgs_mesh *m);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

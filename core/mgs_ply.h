@@ -1,0 +1,36 @@
+/* The 3DGS .ply layout every splat viewer reads (SPEC §4): binary little-endian, per vertex
+ * float x y z nx ny nz f_dc_0..2 f_rest_0..(3*R-1) opacity scale_0..2 rot_0..3, with
+ * R = (deg+1)^2-1 rest coefficients per channel, stored channel-major
+ * (f_rest_{c*R + k}). Reading infers the SH degree from the f_rest count, accepts extra
+ * properties, any property order and ascii / binary_little_endian / binary_big_endian,
+ * and rejects anything malformed with a message naming the file. Also reads plain point
+ * clouds (x y z [red green blue]) for initial points. */
+#ifndef MGS_PLY_H
+#define MGS_PLY_H
+#include <stddef.h>
+#include "core/mgs_error.h"
+#include "core/mgs_gaussians.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err);
+/* Writes the model at its sh_degree; refuses non-finite values (MGS_ERR_NUMERIC);
+ * atomic (temp + rename). */
+mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs_error *err);
+
+typedef struct mgs_point_cloud {
+  size_t n;
+  float *xyz;  /* n*3 */
+  float *rgb;  /* n*3 in [0,1]; grey 0.5 when the file has no colours */
+} mgs_point_cloud;
+
+void mgs_point_cloud_destroy(mgs_point_cloud *pc);
+mgs_status mgs_ply_read_points(const char *path, mgs_point_cloud **out, mgs_error *err);
+mgs_status mgs_ply_write_points(const char *path, const mgs_point_cloud *pc, mgs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,24 @@
+/* Photometric losses with gradients and image metrics, on interleaved RGB float images
+ * (height*width*3). SSIM uses the reference's 11x11 Gaussian window (sigma 1.5) with
+ * zero padding ('same' convolution, as torch conv2d with padding 5). */
+#ifndef MGS_LOSS_H
+#define MGS_LOSS_H
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Mean absolute error; if grad != NULL, ADDS w * dL1/dimg into grad. */
+double mgs_loss_l1(const float *img, const float *gt, int width, int height, int channels,
+                   float w, float *grad);
+/* Mean SSIM over pixels and channels; if grad != NULL, ADDS w * dSSIM/dimg into grad
+ * (pass w = -lambda to get the gradient of lambda*(1 - SSIM)). */
+double mgs_ssim(const float *img, const float *gt, int width, int height, int channels,
+                float w, float *grad);
+double mgs_psnr(const float *img, const float *gt, int width, int height, int channels);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

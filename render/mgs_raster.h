@@ -1,0 +1,67 @@
+/* The differentiable tile rasterizer of 3D Gaussians (the 3DGS forward/backward on CPU).
+ *
+ * Forward: EWA projection (perspective Jacobian, 0.3 px low-pass dilation), near-plane and
+ * frustum culling, 3-sigma screen radius, SH colour up to degree 3 from the view
+ * direction, 16x16 tiles, sort by (tile, depth), per-tile front-to-back compositing with
+ * alpha <= 0.99, contributions below 1/255 skipped, early stop at T < 1e-4.
+ * Backward: gradients for every parameter group of the model plus the per-Gaussian norm
+ * of the view-space (NDC) 2D-mean gradient that adaptive density control uses.
+ *
+ * A context keeps the buffers of the last forward pass (reused between calls, so steady-
+ * state training allocates nothing); backward uses them and must follow the forward it
+ * belongs to with the same model and camera unchanged. Not thread-safe per context; the
+ * work inside is parallel (mgs_parallel_for). */
+#ifndef MGS_RASTER_H
+#define MGS_RASTER_H
+#include <stddef.h>
+#include "core/mgs_error.h"
+#include "core/mgs_gaussians.h"
+#include "core/mgs_camera.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MGS_TILE_SIZE 16
+
+typedef struct mgs_raster_settings {
+  float background[3];   /* composited behind the Gaussians */
+  int sh_degree;         /* active SH degree, <= model's sh_degree */
+  float scale_modifier;  /* multiplies all scales (1) */
+  float dilation;        /* low-pass added to the 2D covariance diagonal, px^2 (0.3) */
+} mgs_raster_settings;
+
+void mgs_raster_settings_default(mgs_raster_settings *s);
+
+typedef struct mgs_raster_output {
+  int width, height;
+  const float *color;   /* height*width*3, composited over the background */
+  const float *alpha;   /* height*width, 1 - final transmittance */
+  const float *depth;   /* height*width, sum_i w_i z_i (alpha-weighted camera depth; divide
+                           by alpha for the expected depth of the covered part) */
+  const int *radii;     /* per Gaussian screen radius in px, 0 when culled */
+  size_t n_visible;     /* Gaussians that survived culling */
+  size_t n_intersections; /* (Gaussian, tile) pairs */
+} mgs_raster_output;
+
+typedef struct mgs_raster mgs_raster;
+mgs_raster *mgs_raster_create(void);
+void mgs_raster_destroy(mgs_raster *r);
+
+/* Output pointers stay valid until the next forward on this context or its destruction. */
+mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
+                              const mgs_raster_settings *s, mgs_raster_output *out, mgs_error *err);
+
+/* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
+ * Gradients are ADDED into `grad` (a model with the same n; its groups are used as
+ * gradient arrays of the same shapes). grad_mean2d (n floats, may be NULL) receives the
+ * norm of dL/d(mean2d) in NDC units (pixel gradient times half the image size, as the
+ * reference), 0 for culled Gaussians. */
+mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
+                               const float *dL_ddepth, mgs_gaussians *grad, float *grad_mean2d,
+                               mgs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

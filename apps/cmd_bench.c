@@ -5,6 +5,7 @@
 
 typedef struct { const char *name; int (*fn)(int, char **); const char *help; } bench;
 static const bench benches[] = {
+  {"io", mgs_bench_io, "3DGS .ply write/read throughput and bit-exact round trip"},
   {"scene", mgs_bench_scene, "Embree dataset rendering: views/s for a large mesh"},
   {"raster", mgs_bench_raster, "rasterizer forward/backward ms and fraction of peak FLOP/s"},
   {"train", mgs_bench_train, "test PSNR against wall time for the built-in scenes"},

@@ -15,6 +15,7 @@ int mgs_cmd_vdb(int argc, char **argv);
 int mgs_cmd_persistence(int argc, char **argv);
 int mgs_cmd_bench(int argc, char **argv);
 
+int mgs_bench_io(int argc, char **argv);
 int mgs_bench_scene(int argc, char **argv);
 int mgs_bench_raster(int argc, char **argv);
 int mgs_bench_train(int argc, char **argv);

@@ -24,13 +24,15 @@ typedef struct mgs_view {
   mgs_camera cam;    /* intrinsics already scaled by the downscale factor */
   mgs_image *image;  /* RGB composited on the background, downscaled; NULL until loaded */
   mgs_image *alpha;  /* 1-channel alpha when the file had one (else NULL) */
+  int full_width, full_height; /* the image file's size before downscaling */
 } mgs_view;
 
 typedef struct mgs_dataset_options {
   mgs_dataset_format format; /* AUTO detects */
   int downscale;             /* integer factor >= 1 */
   int white_background;      /* 1 white (NeRF-synthetic default), 0 black */
-  int load_images;           /* 1: read all images now (and check their sizes) */
+  int load_images;           /* 1: read all images now, in parallel (and check their sizes);
+                                0: only check that each image file exists */
   int test_every;            /* COLMAP / nerfstudio without splits: every Nth view is test (8) */
 } mgs_dataset_options;
 
@@ -43,6 +45,7 @@ typedef struct mgs_dataset {
                                    beside a NeRF-synthetic dataset; NULL if none */
   char *mesh_path;              /* ground-truth mesh if the dataset has one (gt_mesh.ply) */
   float background[3];
+  int downscale;                /* factor applied to cameras and images */
   /* Scene normalization of the reference: centre of the camera centres and the radius
      (1.1 x the largest distance to it) used for learning rates and densification. */
   double center[3];
@@ -51,7 +54,8 @@ typedef struct mgs_dataset {
 
 void mgs_dataset_options_default(mgs_dataset_options *o);
 mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *o, mgs_dataset **out, mgs_error *err);
-/* Loads one view's image if not yet loaded (checks its size against the camera). */
+/* Loads one view's image if not yet loaded (checks its size against the camera, naming
+ * the image on mismatch). Safe to call concurrently for different views. */
 mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err);
 void mgs_dataset_destroy(mgs_dataset *d);
 const char *mgs_split_name(mgs_split s); /* "train", "val", "test" */

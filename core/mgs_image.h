@@ -21,8 +21,12 @@ mgs_image *mgs_image_clone(const mgs_image *img);
 
 /* Reads any format OIIO knows. Errors name the file. */
 mgs_status mgs_image_read(const char *path, mgs_image **out, mgs_error *err);
-/* Writes by extension (.png/.jpg: 8-bit clamped; .exr: half/float). Atomic: writes a
- * temporary file beside `path` and renames it. */
+/* Reads only the header: size and channel count. Errors name the file. */
+mgs_status mgs_image_read_size(const char *path, int *width, int *height, int *channels, mgs_error *err);
+/* Writes by extension (.png/.jpg: 8-bit, clamped and rounded; .exr/.tif/.hdr: 32-bit
+ * float, exact). Alpha (4th channel) is straight, never premultiplied, on read and write,
+ * as PIL gives the reference. Atomic: writes a temporary file beside `path` (keeping its
+ * extension) and renames it; thread-safe. */
 mgs_status mgs_image_write(const char *path, const mgs_image *img, mgs_error *err);
 
 /* RGBA -> RGB composited over background bg (straight alpha). */

@@ -20,8 +20,11 @@ typedef struct mgs_mesh {
 mgs_mesh *mgs_mesh_create(size_t nv, size_t nt);
 void mgs_mesh_destroy(mgs_mesh *m);
 /* Fails (MGS_ERR_FORMAT, naming the file) on an empty mesh, indices out of range or
- * non-finite vertices. */
+ * non-finite vertices. Vertices at identical positions are welded (OBJ splits them by
+ * normal), so boundary counts see the real topology; vertex order is not preserved.
+ * Not for concurrent use from several threads (assimp's logger is process-global). */
 mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err);
+/* Binary PLY, OBJ or OFF by extension; refuses non-finite vertices and bad indices. */
 mgs_status mgs_mesh_write(const char *path, const mgs_mesh *m, mgs_error *err);
 void mgs_mesh_bounds(const mgs_mesh *m, double lo[3], double hi[3]);
 /* Translate/scale so the bounding box is centred at the origin and its largest side is

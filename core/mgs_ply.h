@@ -3,8 +3,11 @@
  * R = (deg+1)^2-1 rest coefficients per channel, stored channel-major
  * (f_rest_{c*R + k}). Reading infers the SH degree from the f_rest count, accepts extra
  * properties, any property order and ascii / binary_little_endian / binary_big_endian,
- * and rejects anything malformed with a message naming the file. Also reads plain point
- * clouds (x y z [red green blue]) for initial points. */
+ * and rejects anything malformed with a message naming the file (MGS_ERR_FORMAT; a
+ * NaN/Inf value is MGS_ERR_NUMERIC naming the vertex index and property). Element counts
+ * are checked against the file size before anything is allocated. Also reads plain point
+ * clouds (x y z [red green blue] as uchar, ushort or float) for initial points and writes
+ * them in the reference's storePly layout (x y z nx ny nz red green blue). */
 #ifndef MGS_PLY_H
 #define MGS_PLY_H
 #include <stddef.h>

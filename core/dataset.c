@@ -1,0 +1,359 @@
+/* Dataset loading common to every format: detection, view lists, image loading and the
+ * reference's scene normalization (getNerfppNorm). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "core/dataset_internal.h"
+#include "core/mgs_fs.h"
+#include "core/mgs_log.h"
+#include "core/mgs_parallel.h"
+
+void mgs_dataset_options_default(mgs_dataset_options *o) {
+  memset(o, 0, sizeof *o);
+  o->format = MGS_DATASET_AUTO;
+  o->downscale = 1;
+  o->white_background = 1;
+  o->load_images = 0;
+  o->test_every = 8;
+}
+
+const char *mgs_split_name(mgs_split s) {
+  switch (s) {
+    case MGS_SPLIT_TRAIN: return "train";
+    case MGS_SPLIT_VAL: return "val";
+    case MGS_SPLIT_TEST: return "test";
+    default: return "?";
+  }
+}
+
+int mgs_file_exists(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+mgs_status mgs_dataset_add_view(mgs_dataset *d, mgs_split split, const char *name, const char *image_path,
+                                const mgs_camera *cam, int full_width, int full_height, mgs_error *err) {
+  if (!mgs_file_exists(image_path)) return mgs_error_set(err, MGS_ERR_IO, "%s: image file not found", image_path);
+  size_t n = d->n_views[split];
+  mgs_view *nv = realloc(d->views[split], sizeof *nv * (n + 1));
+  if (!nv) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", d->root);
+  d->views[split] = nv;
+  mgs_view *v = &nv[n];
+  memset(v, 0, sizeof *v);
+  v->name = mgs_strdup(name);
+  v->image_path = mgs_strdup(image_path);
+  if (!v->name || !v->image_path) {
+    free(v->name);
+    free(v->image_path);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", d->root);
+  }
+  v->cam = *cam;
+  v->full_width = full_width;
+  v->full_height = full_height;
+  d->n_views[split] = n + 1;
+  return MGS_OK;
+}
+
+static int pending_cmp(const void *a, const void *b) {
+  return strcmp(((const mgs_pending_view *)a)->name, ((const mgs_pending_view *)b)->name);
+}
+
+void mgs_pending_free(mgs_pending_view *pv, size_t n) {
+  for (size_t i = 0; pv && i < n; i++) {
+    free(pv[i].name);
+    free(pv[i].image_path);
+  }
+  free(pv);
+}
+
+mgs_status mgs_dataset_split_every(mgs_dataset *d, mgs_pending_view *pv, size_t n, int test_every, mgs_error *err) {
+  mgs_status st = MGS_OK;
+  if (n) qsort(pv, n, sizeof *pv, pending_cmp);
+  for (size_t i = 0; i < n && st == MGS_OK; i++) {
+    mgs_split s = (test_every > 0 && n > 1 && i % (size_t)test_every == 0) ? MGS_SPLIT_TEST : MGS_SPLIT_TRAIN;
+    /* The view name is the file stem, as the reference's image_name. */
+    char stem[512];
+    const char *b = strrchr(pv[i].name, '/');
+    snprintf(stem, sizeof stem, "%s", b ? b + 1 : pv[i].name);
+    char *dot = strrchr(stem, '.');
+    if (dot && dot != stem) *dot = 0;
+    st = mgs_dataset_add_view(d, s, stem, pv[i].image_path, &pv[i].cam, pv[i].width, pv[i].height, err);
+  }
+  mgs_pending_free(pv, n);
+  return st;
+}
+
+static mgs_dataset_format detect(const char *dir) {
+  static const char *colmap_files[] = {"sparse/0/cameras.bin", "sparse/0/cameras.txt", "sparse/cameras.bin", "sparse/cameras.txt"};
+  char *p = mgs_path_join(dir, "transforms_train.json");
+  int nerf = p && mgs_file_exists(p);
+  free(p);
+  if (nerf) return MGS_DATASET_NERF_SYNTHETIC;
+  p = mgs_path_join(dir, "transforms.json");
+  int ns = p && mgs_file_exists(p);
+  free(p);
+  if (ns) return MGS_DATASET_NERFSTUDIO;
+  for (size_t i = 0; i < sizeof colmap_files / sizeof colmap_files[0]; i++) {
+    p = mgs_path_join(dir, colmap_files[i]);
+    int c = p && mgs_file_exists(p);
+    free(p);
+    if (c) return MGS_DATASET_COLMAP;
+  }
+  return MGS_DATASET_AUTO;
+}
+
+/* The reference's getNerfppNorm over the training cameras: centre of the camera centres,
+ * radius 1.1 x the largest distance from it. */
+static void scene_norm(mgs_dataset *d) {
+  mgs_split s = d->n_views[MGS_SPLIT_TRAIN] ? MGS_SPLIT_TRAIN : MGS_SPLIT_TEST;
+  size_t n = d->n_views[s];
+  double c[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; i++) {
+    double p[3];
+    mgs_camera_center(&d->views[s][i].cam, p);
+    for (int k = 0; k < 3; k++) c[k] += p[k];
+  }
+  if (n)
+    for (int k = 0; k < 3; k++) c[k] /= (double)n;
+  double r = 0;
+  for (size_t i = 0; i < n; i++) {
+    double p[3];
+    mgs_camera_center(&d->views[s][i].cam, p);
+    double dd = sqrt((p[0] - c[0]) * (p[0] - c[0]) + (p[1] - c[1]) * (p[1] - c[1]) + (p[2] - c[2]) * (p[2] - c[2]));
+    if (dd > r) r = dd;
+  }
+  memcpy(d->center, c, sizeof c);
+  /* One camera (or all at one spot) gives radius 0, which would zero the learning rates
+     scaled by it: fall back to 1. */
+  d->extent = r > 0 ? 1.1 * r : 1.0;
+}
+
+typedef struct {
+  mgs_dataset *d;
+  mgs_view **views;
+  mgs_status *status;
+  mgs_error *errors;
+} image_job;
+
+static void load_images_range(void *ctx, size_t b, size_t e) {
+  image_job *job = ctx;
+  for (size_t i = b; i < e; i++) job->status[i] = mgs_dataset_load_image(job->d, job->views[i], &job->errors[i]);
+}
+
+/* Decodes every view's image in parallel; reports the first failure in view order, so
+   the message does not depend on scheduling. */
+static mgs_status load_all_images(mgs_dataset *d, mgs_error *err) {
+  size_t n = 0;
+  for (int s = 0; s < MGS_SPLIT_COUNT; s++) n += d->n_views[s];
+  image_job job = {d, calloc(n, sizeof(mgs_view *)), calloc(n, sizeof(mgs_status)), calloc(n, sizeof(mgs_error))};
+  mgs_status st = MGS_OK;
+  if (!job.views || !job.status || !job.errors) {
+    st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", d->root);
+  } else {
+    size_t k = 0;
+    for (int s = 0; s < MGS_SPLIT_COUNT; s++)
+      for (size_t i = 0; i < d->n_views[s]; i++) job.views[k++] = &d->views[s][i];
+    mgs_parallel_for(0, n, 1, load_images_range, &job);
+    for (size_t i = 0; i < n; i++)
+      if (job.status[i] != MGS_OK) {
+        st = job.status[i];
+        if (err) *err = job.errors[i];
+        break;
+      }
+  }
+  free(job.views);
+  free(job.status);
+  free(job.errors);
+  return st;
+}
+
+mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs_dataset **out, mgs_error *err) {
+  *out = NULL;
+  mgs_dataset_options o;
+  if (opt) o = *opt;
+  else mgs_dataset_options_default(&o);
+  if (o.downscale < 1 || o.downscale > 64)
+    return mgs_error_set(err, MGS_ERR_ARG, "%s: downscale factor %d out of range 1..64", dir, o.downscale);
+  if (o.test_every < 0) return mgs_error_set(err, MGS_ERR_ARG, "%s: test_every must be >= 0", dir);
+  if (!mgs_is_dir(dir)) return mgs_error_set(err, MGS_ERR_IO, "%s: dataset directory not found", dir);
+  mgs_dataset_format fmt = o.format == MGS_DATASET_AUTO ? detect(dir) : o.format;
+  if (fmt == MGS_DATASET_AUTO)
+    return mgs_error_set(err, MGS_ERR_FORMAT,
+                         "%s: not a dataset (no transforms_train.json, transforms.json or sparse/0/cameras.{bin,txt})", dir);
+  mgs_dataset *d = calloc(1, sizeof *d);
+  if (!d) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", dir);
+  d->format = fmt;
+  d->root = mgs_strdup(dir);
+  d->downscale = o.downscale;
+  for (int k = 0; k < 3; k++) d->background[k] = o.white_background ? 1.0f : 0.0f;
+  mgs_status st;
+  switch (fmt) {
+    case MGS_DATASET_NERF_SYNTHETIC: st = mgs_dataset_load_nerf_synthetic(d, &o, err); break;
+    case MGS_DATASET_NERFSTUDIO: st = mgs_dataset_load_nerfstudio(d, &o, err); break;
+    case MGS_DATASET_COLMAP: st = mgs_dataset_load_colmap(d, &o, err); break;
+    default: st = mgs_error_set(err, MGS_ERR_ARG, "%s: unknown dataset format", dir);
+  }
+  if (st == MGS_OK && d->n_views[MGS_SPLIT_TRAIN] + d->n_views[MGS_SPLIT_TEST] == 0)
+    st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: dataset has no views", dir);
+  if (st == MGS_OK) {
+    for (int s = 0; s < MGS_SPLIT_COUNT; s++)
+      for (size_t i = 0; i < d->n_views[s]; i++) mgs_camera_downscale(&d->views[s][i].cam, o.downscale);
+    scene_norm(d);
+  }
+  if (st == MGS_OK && o.load_images) st = load_all_images(d, err);
+  if (st != MGS_OK) {
+    mgs_dataset_destroy(d);
+    return st;
+  }
+  *out = d;
+  return MGS_OK;
+}
+
+mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err) {
+  if (v->image) return MGS_OK;
+  mgs_image *img = NULL;
+  mgs_status st = mgs_image_read(v->image_path, &img, err);
+  if (st != MGS_OK) return st;
+  if (img->width != v->full_width || img->height != v->full_height) {
+    st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: image is %dx%d but its camera expects %dx%d", v->image_path, img->width,
+                       img->height, v->full_width, v->full_height);
+    mgs_image_destroy(img);
+    return st;
+  }
+  mgs_image *rgb = NULL, *alpha = NULL;
+  const size_t npx = (size_t)img->width * (size_t)img->height;
+  if (img->channels >= 3) {
+    rgb = mgs_image_composite(img, d->background);
+    if (img->channels >= 4 && (alpha = mgs_image_create(img->width, img->height, 1)))
+      for (size_t i = 0; i < npx; i++) alpha->data[i] = img->data[i * (size_t)img->channels + 3];
+  } else {
+    /* Grey (+alpha): expand to RGB. */
+    rgb = mgs_image_create(img->width, img->height, 3);
+    if (img->channels == 2) alpha = mgs_image_create(img->width, img->height, 1);
+    if (rgb)
+      for (size_t i = 0; i < npx; i++) {
+        float g = img->data[i * (size_t)img->channels];
+        float a = img->channels == 2 ? img->data[i * 2 + 1] : 1.0f;
+        for (int c = 0; c < 3; c++) rgb->data[i * 3 + (size_t)c] = g * a + d->background[c] * (1.0f - a);
+        if (alpha) alpha->data[i] = a;
+      }
+  }
+  mgs_image_destroy(img);
+  if (!rgb) goto nomem;
+  if (d->downscale > 1) {
+    mgs_image *r2 = mgs_image_downscale(rgb, d->downscale);
+    mgs_image_destroy(rgb);
+    rgb = r2;
+    if (alpha) {
+      mgs_image *a2 = mgs_image_downscale(alpha, d->downscale);
+      mgs_image_destroy(alpha);
+      alpha = a2;
+      if (!alpha) goto nomem;
+    }
+    if (!rgb) goto nomem;
+  }
+  v->image = rgb;
+  v->alpha = alpha;
+  return MGS_OK;
+nomem:
+  mgs_image_destroy(rgb);
+  mgs_image_destroy(alpha);
+  return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory (or image smaller than the downscale factor)", v->image_path);
+}
+
+void mgs_dataset_destroy(mgs_dataset *d) {
+  if (!d) return;
+  for (int s = 0; s < MGS_SPLIT_COUNT; s++) {
+    for (size_t i = 0; i < d->n_views[s]; i++) {
+      mgs_view *v = &d->views[s][i];
+      free(v->name);
+      free(v->image_path);
+      mgs_image_destroy(v->image);
+      mgs_image_destroy(v->alpha);
+    }
+    free(d->views[s]);
+  }
+  mgs_point_cloud_destroy(d->init_points);
+  free(d->mesh_path);
+  free(d->root);
+  free(d);
+}
+
+/* ---- JSON helpers ---- */
+
+mgs_status mgs_json_parse_file(const char *path, cJSON **out, mgs_error *err) {
+  *out = NULL;
+  char *text = NULL;
+  size_t size = 0;
+  mgs_status st = mgs_read_file(path, &text, &size, err);
+  if (st != MGS_OK) return st;
+  const char *end = NULL;
+  size_t skip = size >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0; /* UTF-8 byte order mark */
+  cJSON *j = cJSON_ParseWithLengthOpts(text + skip, size - skip, &end, 0);
+  if (!j) {
+    size_t off = end && end >= text && end <= text + size ? (size_t)(end - text) : 0;
+    free(text);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: invalid JSON near byte %zu", path, off);
+  }
+  free(text);
+  if (!cJSON_IsObject(j)) {
+    cJSON_Delete(j);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: top level is not a JSON object", path);
+  }
+  *out = j;
+  return MGS_OK;
+}
+
+mgs_status mgs_json_number(const cJSON *obj, const char *key, const char *what, double *v, mgs_error *err) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing field '%s'", what, key);
+  if (!cJSON_IsNumber(it)) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: field '%s' must be a number", what, key);
+  if (!isfinite(it->valuedouble)) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: field '%s' is not finite", what, key);
+  *v = it->valuedouble;
+  return MGS_OK;
+}
+
+int mgs_json_opt_number(const cJSON *obj, const char *key, const char *what, double *v, mgs_status *st, mgs_error *err) {
+  if (!cJSON_GetObjectItemCaseSensitive(obj, key)) return 0;
+  *st = mgs_json_number(obj, key, what, v, err);
+  return 1;
+}
+
+mgs_status mgs_json_string(const cJSON *obj, const char *key, const char *what, const char **v, mgs_error *err) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing field '%s'", what, key);
+  if (!cJSON_IsString(it) || !it->valuestring)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: field '%s' must be a string", what, key);
+  if (!it->valuestring[0]) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: field '%s' is empty", what, key);
+  *v = it->valuestring;
+  return MGS_OK;
+}
+
+mgs_status mgs_json_matrix4(const cJSON *obj, const char *key, const char *what, double m[16], mgs_error *err) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing field '%s'", what, key);
+  int ok = cJSON_IsArray(it) && cJSON_GetArraySize(it) == 4;
+  for (int r = 0; ok && r < 4; r++) {
+    const cJSON *row = cJSON_GetArrayItem(it, r);
+    ok = cJSON_IsArray(row) && cJSON_GetArraySize(row) == 4;
+    for (int c = 0; ok && c < 4; c++) {
+      const cJSON *x = cJSON_GetArrayItem(row, c);
+      ok = cJSON_IsNumber(x) && isfinite(x->valuedouble);
+      if (ok) m[r * 4 + c] = x->valuedouble;
+    }
+  }
+  if (!ok) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: %s must be 4x4 finite numbers", what, key);
+  /* A camera-to-world matrix: last row 0 0 0 1 and a rotation part that is orthonormal
+     (up to a tolerance; Blender exports carry float noise). */
+  if (fabs(m[12]) > 1e-6 || fabs(m[13]) > 1e-6 || fabs(m[14]) > 1e-6 || fabs(m[15] - 1) > 1e-6)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: %s last row must be 0 0 0 1", what, key);
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++) {
+      double dot = m[0 * 4 + a] * m[0 * 4 + b] + m[1 * 4 + a] * m[1 * 4 + b] + m[2 * 4 + a] * m[2 * 4 + b];
+      if (fabs(dot - (a == b)) > 1e-3)
+        return mgs_error_set(err, MGS_ERR_FORMAT, "%s: %s rotation part is not orthonormal (scaled or sheared pose)", what, key);
+    }
+  return MGS_OK;
+}

@@ -1,0 +1,136 @@
+/* Mesh reading through assimp's C API: any format it reads (OBJ, PLY, OFF, ...),
+ * triangulated, all meshes merged, vertices at identical positions welded (OBJ files
+ * split vertices by normal or texture coordinate). */
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "core/mgs_mesh.h"
+
+typedef struct { float p[3]; uint32_t i; } keyed_vertex;
+static int pos_cmp(const void *a, const void *b) {
+  const float *p = ((const keyed_vertex *)a)->p, *q = ((const keyed_vertex *)b)->p;
+  for (int k = 0; k < 3; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+  return 0;
+}
+
+/* Merges vertices with identical positions; rewrites indices. */
+static mgs_status weld(mgs_mesh *m) {
+  if (m->nv < 2) return MGS_OK;
+  keyed_vertex *kv = malloc(sizeof *kv * m->nv);
+  uint32_t *remap = malloc(sizeof *remap * m->nv);
+  float *nv = malloc(sizeof(float) * 3 * m->nv);
+  if (!kv || !remap || !nv) { free(kv); free(remap); free(nv); return MGS_ERR_NOMEM; }
+  for (size_t i = 0; i < m->nv; i++) {
+    memcpy(kv[i].p, m->v + 3 * i, sizeof kv[i].p);
+    kv[i].i = (uint32_t)i;
+  }
+  qsort(kv, m->nv, sizeof *kv, pos_cmp);
+  size_t n = 0;
+  for (size_t i = 0; i < m->nv; i++) {
+    if (i == 0 || pos_cmp(&kv[i], &kv[i - 1]) != 0) {
+      memcpy(nv + 3 * n, kv[i].p, sizeof(float) * 3);
+      n++;
+    }
+    remap[kv[i].i] = (uint32_t)(n - 1);
+  }
+  for (size_t i = 0; i < m->nt * 3; i++) m->t[i] = remap[m->t[i]];
+  free(m->v);
+  m->v = nv;
+  m->nv = n;
+  free(kv);
+  free(remap);
+  return MGS_OK;
+}
+
+/* Some assimp readers repair bad input silently and only log it (the OFF reader clamps
+ * out-of-range indices): such errors are caught from the log and made fatal. Errors
+ * about other things (a missing .mtl file) stay harmless. */
+static _Thread_local char log_error[256];
+static void log_cb(const char *msg, char *user) {
+  (void)user;
+  if (log_error[0] || strncmp(msg, "Error", 5) != 0) return;
+  if (strstr(msg, "out of range") || strstr(msg, "index") || strstr(msg, "Index")) {
+    const char *m = strstr(msg, "T0: ");
+    snprintf(log_error, sizeof log_error, "%s", m ? m + 4 : msg);
+    size_t n = strlen(log_error);
+    while (n && (log_error[n - 1] == '\n' || log_error[n - 1] == '\r')) log_error[--n] = 0;
+  }
+}
+
+mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
+  *out = NULL;
+  struct stat st;
+  if (stat(path, &st) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: mesh file not found", path);
+  if (!S_ISREG(st.st_mode)) return mgs_error_set(err, MGS_ERR_IO, "%s: not a regular file", path);
+  log_error[0] = 0;
+  struct aiLogStream stream = {log_cb, NULL};
+  aiAttachLogStream(&stream);
+  const struct aiScene *sc = aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  aiDetachLogStream(&stream);
+  if (sc && log_error[0]) {
+    aiReleaseImport(sc);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: %s", path, log_error);
+  }
+  if (!sc) {
+    const char *e = aiGetErrorString();
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: cannot read mesh: %s", path, e && e[0] ? e : "unknown error");
+  }
+  size_t nv = 0, nt = 0;
+  for (unsigned i = 0; i < sc->mNumMeshes; i++) {
+    const struct aiMesh *am = sc->mMeshes[i];
+    nv += am->mNumVertices;
+    for (unsigned f = 0; f < am->mNumFaces; f++) nt += am->mFaces[f].mNumIndices == 3;
+  }
+  if (nv == 0 || nt == 0 || nv > UINT32_MAX) {
+    aiReleaseImport(sc);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: empty mesh (no triangles)", path);
+  }
+  mgs_mesh *m = mgs_mesh_create(nv, nt);
+  if (!m) {
+    aiReleaseImport(sc);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  }
+  size_t vo = 0, to = 0;
+  mgs_status status = MGS_OK;
+  for (unsigned i = 0; i < sc->mNumMeshes && status == MGS_OK; i++) {
+    const struct aiMesh *am = sc->mMeshes[i];
+    for (unsigned v = 0; v < am->mNumVertices; v++) {
+      const struct aiVector3D p = am->mVertices[v];
+      if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+        status = mgs_error_set(err, MGS_ERR_FORMAT, "%s: vertex %zu is not finite", path, vo + v);
+        break;
+      }
+      m->v[(vo + v) * 3 + 0] = p.x;
+      m->v[(vo + v) * 3 + 1] = p.y;
+      m->v[(vo + v) * 3 + 2] = p.z;
+    }
+    for (unsigned f = 0; f < am->mNumFaces && status == MGS_OK; f++) {
+      const struct aiFace *fc = &am->mFaces[f];
+      if (fc->mNumIndices != 3) continue; /* points and lines */
+      for (int k = 0; k < 3; k++) {
+        if (fc->mIndices[k] >= am->mNumVertices) {
+          status = mgs_error_set(err, MGS_ERR_FORMAT, "%s: face %u refers to vertex %u of %u", path, f, fc->mIndices[k], am->mNumVertices);
+          break;
+        }
+        m->t[to * 3 + (size_t)k] = (uint32_t)(vo + fc->mIndices[k]);
+      }
+      to++;
+    }
+    vo += am->mNumVertices;
+  }
+  aiReleaseImport(sc);
+  if (status == MGS_OK && weld(m) != MGS_OK) status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  if (status != MGS_OK) {
+    mgs_mesh_destroy(m);
+    return status;
+  }
+  *out = m;
+  return MGS_OK;
+}

@@ -1,0 +1,219 @@
+/* The 3DGS .ply layout (SPEC §4): read any encoding / property order, write the
+ * reference's binary little-endian layout. f_rest is channel-major in the file
+ * (f_rest_{c*R+k}) and [i][k][c] in memory. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/mgs_fs.h"
+#include "core/mgs_ply.h"
+#include "core/ply_format.h"
+
+enum { G_X, G_Y, G_Z, G_DC0, G_DC1, G_DC2, G_OPACITY, G_S0, G_S1, G_S2, G_R0, G_R1, G_R2, G_R3, G_FIXED };
+static const char *const fixed_names[G_FIXED] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+                                                 "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+
+static int sh_rest_per_channel(int deg) { return (deg + 1) * (deg + 1) - 1; }
+
+typedef struct {
+  const char *path;
+  const ply_element *el;
+  int col_fixed[G_FIXED];
+  int col_rest[MGS_SH_REST_MAX];
+  int n_rest, degree, rest_per_channel;
+  mgs_gaussians *g;
+} gread;
+
+static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *err) {
+  gread *r = ctx;
+  if (row == 0) {
+    /* Allocated only now: the container has checked the count against the file size. */
+    r->g = mgs_gaussians_create(r->el->count, r->degree);
+    size_t first = 0;
+    if (!r->g || mgs_gaussians_append(r->g, r->el->count, &first, err) != MGS_OK)
+      return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for %zu Gaussians", r->path, r->el->count);
+  }
+  mgs_gaussians *g = r->g;
+  float f[G_FIXED];
+  for (int k = 0; k < G_FIXED; k++) {
+    f[k] = (float)v[r->col_fixed[k]];
+    if (!isfinite(f[k]))
+      return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite (%g)", r->path, row,
+                           fixed_names[k], v[r->col_fixed[k]]);
+  }
+  g->mean[row * 3 + 0] = f[G_X];
+  g->mean[row * 3 + 1] = f[G_Y];
+  g->mean[row * 3 + 2] = f[G_Z];
+  g->sh_dc[row * 3 + 0] = f[G_DC0];
+  g->sh_dc[row * 3 + 1] = f[G_DC1];
+  g->sh_dc[row * 3 + 2] = f[G_DC2];
+  g->opacity[row] = f[G_OPACITY];
+  for (int k = 0; k < 3; k++) g->log_scale[row * 3 + k] = f[G_S0 + k];
+  for (int k = 0; k < 4; k++) g->rot[row * 4 + k] = f[G_R0 + k];
+  float *rest = g->sh_rest + row * MGS_SH_REST_MAX;
+  memset(rest, 0, sizeof(float) * MGS_SH_REST_MAX);
+  const int R = r->rest_per_channel;
+  for (int j = 0; j < r->n_rest; j++) {
+    float x = (float)v[r->col_rest[j]];
+    if (!isfinite(x))
+      return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property 'f_rest_%d' is not finite (%g)", r->path, row, j,
+                           v[r->col_rest[j]]);
+    int c = j / R, k = j % R; /* file: channel-major */
+    rest[k * 3 + c] = x;      /* memory: [k][c] */
+  }
+  return MGS_OK;
+}
+
+static int float_type(ply_type t) { return t == PLY_FLOAT32 || t == PLY_FLOAT64; }
+
+mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err) {
+  *out = NULL;
+  ply_file pf;
+  mgs_status st = ply_open(path, &pf, err);
+  if (st != MGS_OK) return st;
+  int vi = -1;
+  for (int i = 0; i < pf.n_elems; i++)
+    if (strcmp(pf.elems[i].name, "vertex") == 0) { vi = i; break; }
+  if (vi < 0) { ply_close(&pf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no 'vertex' element", path); }
+  const ply_element *el = &pf.elems[vi];
+  gread r;
+  memset(&r, 0, sizeof r);
+  r.path = path;
+  r.el = el;
+  for (int k = 0; k < G_FIXED; k++) {
+    int c = ply_find_property(el, fixed_names[k]);
+    if (c < 0) { ply_close(&pf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing vertex property '%s' (not a 3DGS .ply?)", path, fixed_names[k]); }
+    if (el->props[c].is_list || !float_type(el->props[c].type)) {
+      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: vertex property '%s' has type %s%s; expected float", path, fixed_names[k],
+                         el->props[c].is_list ? "list " : "", ply_type_name(el->props[c].type));
+      ply_close(&pf);
+      return st;
+    }
+    r.col_fixed[k] = c;
+  }
+  /* f_rest_0..M-1 must be present without gaps; M decides the degree. */
+  int n_rest = 0, max_idx = -1;
+  for (int i = 0; i < el->n_props; i++) {
+    const char *nm = el->props[i].name;
+    if (strncmp(nm, "f_rest_", 7) != 0) continue;
+    char *e = NULL;
+    long idx = strtol(nm + 7, &e, 10);
+    if (!e || *e || e == nm + 7 || idx < 0 || idx > 1000) continue; /* not ours: ignore */
+    if (el->props[i].is_list || !float_type(el->props[i].type)) {
+      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: vertex property '%s' has type %s; expected float", path, nm, ply_type_name(el->props[i].type));
+      ply_close(&pf);
+      return st;
+    }
+    n_rest++;
+    if (idx > max_idx) max_idx = (int)idx;
+  }
+  int degree = -1;
+  for (int d = 0; d <= 3; d++)
+    if (n_rest == 3 * sh_rest_per_channel(d)) degree = d;
+  if (degree < 0) {
+    ply_close(&pf);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: %d f_rest properties; expected 0, 9, 24 or 45 (SH degree 0..3)", path, n_rest);
+  }
+  if (max_idx != n_rest - 1) {
+    ply_close(&pf);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: f_rest properties are not numbered 0..%d", path, n_rest - 1);
+  }
+  for (int j = 0; j < n_rest; j++) {
+    char nm[32];
+    snprintf(nm, sizeof nm, "f_rest_%d", j);
+    r.col_rest[j] = ply_find_property(el, nm);
+    if (r.col_rest[j] < 0) { ply_close(&pf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing vertex property '%s'", path, nm); }
+  }
+  r.n_rest = n_rest;
+  r.degree = degree;
+  r.rest_per_channel = sh_rest_per_channel(degree);
+  if (el->count == 0) {
+    r.g = mgs_gaussians_create(0, degree);
+    st = r.g ? ply_read_element(&pf, vi, read_row, &r, err)
+             : mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  } else {
+    st = ply_read_element(&pf, vi, read_row, &r, err);
+  }
+  ply_close(&pf);
+  if (st != MGS_OK) {
+    mgs_gaussians_destroy(r.g);
+    return st;
+  }
+  *out = r.g;
+  return MGS_OK;
+}
+
+/* ---- writing ---- */
+
+static mgs_status check_finite_named(const char *path, const mgs_gaussians *g, int R, mgs_error *err) {
+  static const struct { mgs_param_group grp; const char *name; int dim; } groups[] = {
+    {MGS_PARAM_MEAN, "x/y/z", 3}, {MGS_PARAM_SH_DC, "f_dc", 3}, {MGS_PARAM_OPACITY, "opacity", 1},
+    {MGS_PARAM_LOG_SCALE, "scale", 3}, {MGS_PARAM_ROT, "rot", 4}};
+  const float *arr[] = {g->mean, g->sh_dc, g->opacity, g->log_scale, g->rot};
+  for (size_t i = 0; i < g->n; i++) {
+    for (int q = 0; q < 5; q++)
+      for (int k = 0; k < groups[q].dim; k++)
+        if (!isfinite(arr[q][i * (size_t)groups[q].dim + (size_t)k]))
+          return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: refusing to write: Gaussian %zu has a non-finite %s[%d]", path, i, groups[q].name, k);
+    for (int k = 0; k < R; k++)
+      for (int c = 0; c < 3; c++)
+        if (!isfinite(g->sh_rest[i * MGS_SH_REST_MAX + (size_t)(k * 3 + c)]))
+          return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: refusing to write: Gaussian %zu has a non-finite f_rest_%d", path, i, c * R + k);
+  }
+  return MGS_OK;
+}
+
+mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs_error *err) {
+  if (!g) return mgs_error_set(err, MGS_ERR_ARG, "%s: no model to write", path);
+  if (g->sh_degree < 0 || g->sh_degree > 3)
+    return mgs_error_set(err, MGS_ERR_ARG, "%s: SH degree %d out of range 0..3", path, g->sh_degree);
+  const int R = sh_rest_per_channel(g->sh_degree);
+  mgs_status st = check_finite_named(path, g, R, err);
+  if (st != MGS_OK) return st;
+
+  mgs_atomic_file *af = NULL;
+  FILE *fp = NULL;
+  st = mgs_atomic_open(path, &af, &fp, err);
+  if (st != MGS_OK) return st;
+  /* The header exactly as the reference (plyfile) writes it. */
+  fprintf(fp, "ply\nformat binary_little_endian 1.0\nelement vertex %zu\n", g->n);
+  fputs("property float x\nproperty float y\nproperty float z\n"
+        "property float nx\nproperty float ny\nproperty float nz\n"
+        "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n", fp);
+  for (int j = 0; j < 3 * R; j++) fprintf(fp, "property float f_rest_%d\n", j);
+  fputs("property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
+        "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n", fp);
+
+  const int nf = 3 + 3 + 3 + 3 * R + 1 + 3 + 4;
+  const size_t row_bytes = (size_t)nf * 4;
+  enum { ROWS_PER_CHUNK = 4096 };
+  unsigned char *buf = malloc(row_bytes * ROWS_PER_CHUNK);
+  if (!buf) {
+    mgs_atomic_abort(af);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  }
+  for (size_t i0 = 0; i0 < g->n; i0 += ROWS_PER_CHUNK) {
+    size_t i1 = i0 + ROWS_PER_CHUNK < g->n ? i0 + ROWS_PER_CHUNK : g->n;
+    unsigned char *p = buf;
+    for (size_t i = i0; i < i1; i++) {
+      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->mean[i * 3 + (size_t)k]);
+      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, 0.0f); /* normals: unused, as the reference */
+      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->sh_dc[i * 3 + (size_t)k]);
+      for (int c = 0; c < 3; c++)
+        for (int k = 0; k < R; k++, p += 4) ply_put_f32le(p, g->sh_rest[i * MGS_SH_REST_MAX + (size_t)(k * 3 + c)]);
+      ply_put_f32le(p, g->opacity[i]);
+      p += 4;
+      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->log_scale[i * 3 + (size_t)k]);
+      for (int k = 0; k < 4; k++, p += 4) ply_put_f32le(p, g->rot[i * 4 + (size_t)k]);
+    }
+    size_t bytes = (size_t)(p - buf);
+    if (fwrite(buf, 1, bytes, fp) != bytes) {
+      free(buf);
+      mgs_atomic_abort(af);
+      return mgs_error_set(err, MGS_ERR_IO, "%s: write failed (disk full?)", path);
+    }
+  }
+  free(buf);
+  return mgs_atomic_commit(af, err);
+}

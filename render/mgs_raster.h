@@ -7,6 +7,20 @@
  * Backward: gradients for every parameter group of the model plus the per-Gaussian norm
  * of the view-space (NDC) 2D-mean gradient that adaptive density control uses.
  *
+ * Deliberate differences from the reference (diff-gaussian-rasterization), none of which
+ * changes the forward image:
+ *  - gradients are the exact derivatives of the forward: none flows through an alpha
+ *    clamped at 0.99 (the reference passes it), the Jacobian's x/z, y/z clamp also halves
+ *    the depth derivative of J (the reference keeps the unclamped formula), the conic and
+ *    screen-mean derivatives omit the reference's 1e-7 guards;
+ *  - the principal point may be anywhere (the reference assumes the image centre; the
+ *    Jacobian clamp is generalized so that it reduces to +-1.3 tan(fov/2) there);
+ *  - binning drops tiles of the 3-sigma rectangle that the alpha >= 1/255 ellipse misses
+ *    (they receive nothing either way), and Gaussians with opacity < 1/255 are not binned
+ *    (radii still reported as the reference's);
+ *  - Gaussians with a non-finite parameter, projection or colour are culled (radius 0).
+ * Sorting is by float depth, ties by index, as the reference's stable 64-bit key sort.
+ *
  * A context keeps the buffers of the last forward pass (reused between calls, so steady-
  * state training allocates nothing); backward uses them and must follow the forward it
  * belongs to with the same model and camera unchanged. Not thread-safe per context; the
@@ -29,6 +43,9 @@ typedef struct mgs_raster_settings {
   int sh_degree;         /* active SH degree, <= model's sh_degree */
   float scale_modifier;  /* multiplies all scales (1) */
   float dilation;        /* low-pass added to the 2D covariance diagonal, px^2 (0.3) */
+  float near_plane;      /* Gaussians with camera depth z <= this are culled (0.2, the
+                            reference's fixed value; the camera's znear is not used so that
+                            training matches the reference) */
 } mgs_raster_settings;
 
 void mgs_raster_settings_default(mgs_raster_settings *s);
@@ -47,6 +64,16 @@ typedef struct mgs_raster_output {
 typedef struct mgs_raster mgs_raster;
 mgs_raster *mgs_raster_create(void);
 void mgs_raster_destroy(mgs_raster *r);
+
+/* Statistics of the last forward/backward on this context (for the benchmark): number of
+ * Gaussian x pixel evaluations performed (counted per 16-pixel tile row). */
+void mgs_raster_last_evals(const mgs_raster *r, double *forward, double *backward);
+/* Wall time (ms) of the phases of the last forward/backward on this context. */
+typedef struct mgs_raster_profile {
+  double project_ms, bin_ms, render_ms;    /* forward */
+  double tiles_ms, reduce_ms;              /* backward: per-tile gradients, per-Gaussian chain */
+} mgs_raster_profile;
+void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
 
 /* Output pointers stay valid until the next forward on this context or its destruction. */
 mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,

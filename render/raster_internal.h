@@ -1,0 +1,108 @@
+/* Internal state of the tile rasterizer shared by its files (raster_*.c). Not public:
+ * render/mgs_raster.h is the contract. */
+#ifndef MGS_RASTER_INTERNAL_H
+#define MGS_RASTER_INTERNAL_H
+#include <stddef.h>
+#include <stdint.h>
+#include "render/mgs_raster.h"
+
+/* What the tile kernels need of one projected Gaussian (48 bytes; copied into every tile
+ * list it belongs to by the binning). */
+typedef struct mgs_splat {
+  float u, v;          /* screen mean, pixels (pixel centres at +0.5) */
+  float A, B, C;       /* conic = inverse 2D covariance: power = -(A dx^2 + 2B dx dy + C dy^2)/2 */
+  float opacity;       /* sigmoid(logit) */
+  float rgb[3];        /* SH colour, clamped at 0 */
+  float z;             /* camera depth */
+  float ry;            /* half height (px) of the region where opacity*G >= 1/255 */
+  float pad;
+} mgs_splat;
+
+/* Per-Gaussian data the backward needs beyond the splat (kept from the forward rather
+ * than recomputed: exp, quaternion normalization and the Jacobian are not free). */
+typedef struct mgs_proj_aux {
+  float R[9];          /* rotation of the normalized quaternion */
+  float s[3];          /* scales (modifier applied) */
+  float T0[3], T1[3];  /* rows of J W, the 2x3 map of the EWA projection */
+  float t[3];          /* camera-space mean (float, after the double transform) */
+  float txc, tyc;      /* t.x, t.y after the Jacobian's x/z, y/z clamp */
+  float dir[3];        /* unit view direction (world), for the SH backward */
+  float dist;          /* |mean - camera centre| */
+  uint8_t clamped[3];  /* colour channel clamped at 0 */
+  uint8_t clampx, clampy; /* the Jacobian's x/z, y/z clamp was active */
+} mgs_proj_aux;
+
+/* Sum over one tile's pixels of the gradient w.r.t. one splat's values. */
+enum { GS_R, GS_G, GS_B, GS_Z, GS_OP, GS_U, GS_V, GS_A, GS_B2, GS_C, GS_N };
+
+struct mgs_raster {
+  /* the forward this context belongs to */
+  const mgs_gaussians *g;
+  mgs_camera cam;
+  mgs_raster_settings s;
+  int width, height, tiles_x, tiles_y;
+  size_t n;
+  int have_forward;
+
+  /* per Gaussian (capacity cap_n) */
+  size_t cap_n;
+  mgs_splat *splat;
+  mgs_proj_aux *aux;
+  int *radii;
+  uint16_t *rect;          /* tile rect x0, y0, x1, y1 (exclusive) */
+  uint32_t *count;         /* tiles touched, 0 when culled */
+
+  /* visible Gaussians, depth-sorted (capacity cap_n) */
+  size_t n_visible;
+  uint32_t *vis_key, *vis_idx, *tmp_key, *tmp_idx;
+  uint32_t *gauss_off;     /* per Gaussian: first of its count[i] gradient slots (index order) */
+
+  /* intersections (capacity cap_isect) */
+  size_t n_isect, cap_isect;
+  mgs_splat *isect_splat;  /* copy of the splat of each (tile, depth)-sorted intersection, so
+                              the tile kernels stream through memory instead of gathering */
+  uint32_t *isect_slot;    /* per intersection: its gradient slot, gauss_off[i] + (j-th tile of
+                              Gaussian i), so the per-Gaussian pass reads its slots in order */
+  float *isect_grad;       /* GS_N floats per intersection (backward) */
+
+  /* per tile */
+  size_t cap_tiles;
+  uint32_t *tile_start;    /* tiles+1 */
+  uint32_t *chunk_cnt;     /* per (chunk, tile) counts of the binning */
+  uint32_t *tile_evals;    /* tile rows evaluated per tile (statistics) */
+  size_t cap_chunk_cnt;
+
+  /* per pixel */
+  size_t cap_pix;
+  float *out_color, *out_alpha, *out_depth, *final_T;
+  int32_t *n_contrib;
+
+  /* statistics of the last calls (benchmark) */
+  double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
+  mgs_raster_profile prof;
+};
+
+/* raster_project.c */
+void mgs_raster_project_all(mgs_raster *r);
+void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, float gsum[GS_N][16],
+                                   mgs_gaussians *grad, float *grad_mean2d);
+/* raster_sh.c */
+void mgs_sh_eval(int deg, const float *dc, const float *rest, const float dir[3], float rgb[3]);
+/* dL_drgb: gradient w.r.t. the unclamped colour. Adds into dc, rest, returns dL/ddir. */
+void mgs_sh_backward(int deg, const float *dc, const float *rest, const float dir[3],
+                     const float dL_drgb[3], float *g_dc, float *g_rest, float dL_ddir[3]);
+/* raster_bin.c */
+mgs_status mgs_raster_bin(mgs_raster *r, mgs_error *err);
+/* raster_forward.c / raster_backward.c */
+void mgs_raster_render_tiles(mgs_raster *r);
+void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
+                               const float *dL_ddepth);
+/* raster_context.c */
+mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
+mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
+
+/* The forward's per-pixel evaluation, shared so forward and backward agree bit for bit. */
+#define MGS_ALPHA_MIN (1.0f / 255.0f)
+#define MGS_ALPHA_MAX 0.99f
+#define MGS_T_MIN 1e-4f
+#endif

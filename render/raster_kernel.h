@@ -1,0 +1,26 @@
+/* The per-pixel Gaussian evaluation shared by the forward and backward tile kernels (one
+ * 16-pixel tile row at a time), so that both take the same alpha decisions bit for bit.
+ * Internal. */
+#ifndef MGS_RASTER_KERNEL_H
+#define MGS_RASTER_KERNEL_H
+#include <math.h>
+#include "render/raster_internal.h"
+#include "render/raster_simd.h"
+
+/* power = -(A dx^2 + C dy^2)/2 - B dx dy, dx = pixel centre - u (the reference's
+ * formula; its d is mean - pixel, the sign cancels in every term). */
+MGS_VINLINE v16f mgs_row_power(const mgs_splat *sp, v16f dx, float dy) {
+  /* (-A/2 dx - B dy) dx - C/2 dy^2 */
+  float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;
+  return v16f_fma(v16f_fma(v16f_set1(-0.5f * sp->A), dx, v16f_set1(bdy)), dx, v16f_set1(hc));
+}
+
+/* Rows [*lo, *hi] of a tile starting at pixel row y0 (nrows rows) that can hold
+ * contributions of sp (|pixel centre - v| <= ry); empty when *lo > *hi. */
+MGS_VINLINE void mgs_row_range(const mgs_splat *sp, int y0, int nrows, int *lo, int *hi) {
+  float a = sp->v - sp->ry - 0.5f - (float)y0, b = sp->v + sp->ry - 0.5f - (float)y0;
+  int l = a <= 0 ? 0 : (a >= (float)nrows ? nrows : (int)ceilf(a));
+  int h = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
+  *lo = l; *hi = h;
+}
+#endif

@@ -1,0 +1,375 @@
+/* Per-Gaussian preprocessing of the forward (EWA projection, culling, SH colour, tile
+ * rectangle) and its backward, as the reference 3DGS preprocessCUDA/computeCov2D/
+ * computeCov3D. The world->camera transform is done in double (scenes far from the
+ * origin), everything after it in float. */
+#include <math.h>
+#include "core/mgs_math.h"
+#include "core/mgs_parallel.h"
+#include "render/raster_internal.h"
+#include "render/raster_simd.h"
+
+/* The x/z and y/z range the Jacobian is evaluated in: the reference clamps to
+ * +-1.3*tan(fov/2); written here for a principal point anywhere (reduces to the
+ * reference's when it is the image centre). */
+static void jacobian_limits(const mgs_camera *cam, float lx[2], float ly[2]) {
+  double hx = 0.5 * cam->width / cam->fx, hy = 0.5 * cam->height / cam->fy;
+  lx[0] = (float)(-cam->cx / cam->fx - 0.3 * hx);
+  lx[1] = (float)((cam->width - cam->cx) / cam->fx + 0.3 * hx);
+  ly[0] = (float)(-cam->cy / cam->fy - 0.3 * hy);
+  ly[1] = (float)((cam->height - cam->cy) / cam->fy + 0.3 * hy);
+}
+
+static int clamp_tile(double v, int hi) {
+  if (!(v > 0)) return 0;
+  if (v > hi) return hi;
+  return (int)v;
+}
+
+typedef struct proj_ctx {
+  mgs_raster *r;
+  float W[9];
+  float lx[2], ly[2];
+  double campos[3];
+} proj_ctx;
+
+static void cull(mgs_raster *r, size_t i) {
+  r->radii[i] = 0;
+  r->count[i] = 0;
+}
+
+/* Gaussians are projected 16 at a time: the per-Gaussian scalar parts (the double
+ * world->camera transform, culling, the tile rectangle, SH) run per lane, the float
+ * covariance algebra in between runs as 16-wide vectors. */
+typedef struct proj_block {
+  int n;                                  /* lanes in use */
+  int alive[16];
+  double td[3][16];                       /* camera-space mean, double */
+  float q[4][16], ls[3][16], logit[16];   /* parameters */
+  float tx[16], ty[16], tz[16];
+  /* results of the vector part */
+  float R[9][16], s[3][16], T0[3][16], T1[3][16];
+  float a[16], b[16], c[16], det[16], A[16], B[16], C[16], radius[16], op[16], txc[16], tyc[16];
+  int32_t clx[16], cly[16];
+} proj_block;
+
+static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
+  const mgs_raster *r = pc->r;
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f);
+  /* rotation of the normalized quaternion (identity for a zero one, as mgs_quat_to_mat3f) */
+  v16f w = v16f_load(pb->q[0]), x = v16f_load(pb->q[1]), y = v16f_load(pb->q[2]), z = v16f_load(pb->q[3]);
+  v16f n2 = w * w + x * x + y * y + z * z;
+  v16i nz = n2 > zero;
+  v16f inv = one / v16f_sqrt(v16f_select(nz, n2, one));
+  w = v16f_select(nz, w * inv, one); x = v16f_and(nz, x * inv); y = v16f_and(nz, y * inv); z = v16f_and(nz, z * inv);
+  v16f two = v16f_set1(2.0f);
+  v16f R[9];
+  R[0] = one - two * (y * y + z * z); R[1] = two * (x * y - w * z); R[2] = two * (x * z + w * y);
+  R[3] = two * (x * y + w * z); R[4] = one - two * (x * x + z * z); R[5] = two * (y * z - w * x);
+  R[6] = two * (x * z - w * y); R[7] = two * (y * z + w * x); R[8] = one - two * (x * x + y * y);
+  v16f sv[3];
+  for (int k = 0; k < 3; k++) sv[k] = v16f_set1(r->s.scale_modifier) * v16f_exp(v16f_load(pb->ls[k]));
+  v16f M[9];
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++) M[3 * a + k] = R[3 * a + k] * sv[k];
+  v16f S0 = M[0] * M[0] + M[1] * M[1] + M[2] * M[2];
+  v16f S1 = M[0] * M[3] + M[1] * M[4] + M[2] * M[5];
+  v16f S2 = M[0] * M[6] + M[1] * M[7] + M[2] * M[8];
+  v16f S3 = M[3] * M[3] + M[4] * M[4] + M[5] * M[5];
+  v16f S4 = M[3] * M[6] + M[4] * M[7] + M[5] * M[8];
+  v16f S5 = M[6] * M[6] + M[7] * M[7] + M[8] * M[8];
+  /* Jacobian with the reference's clamp */
+  v16f fx = v16f_set1((float)r->cam.fx), fy = v16f_set1((float)r->cam.fy);
+  v16f tx = v16f_load(pb->tx), ty = v16f_load(pb->ty), tz = v16f_load(pb->tz);
+  v16f iz = one / tz;
+  v16f txtz = tx * iz, tytz = ty * iz;
+  v16f lx0 = v16f_set1(pc->lx[0]), lx1 = v16f_set1(pc->lx[1]), ly0 = v16f_set1(pc->ly[0]), ly1 = v16f_set1(pc->ly[1]);
+  v16i_store(pb->clx, (txtz < lx0) | (txtz > lx1));
+  v16i_store(pb->cly, (tytz < ly0) | (tytz > ly1));
+  v16f txc = v16f_min(v16f_max(txtz, lx0), lx1) * tz, tyc = v16f_min(v16f_max(tytz, ly0), ly1) * tz;
+  v16f J00 = fx * iz, J02 = v16f_set1(-1.0f) * fx * txc * iz * iz, J11 = fy * iz, J12 = v16f_set1(-1.0f) * fy * tyc * iz * iz;
+  const float *W = pc->W;
+  v16f T0[3], T1[3];
+  for (int j = 0; j < 3; j++) {
+    T0[j] = J00 * v16f_set1(W[j]) + J02 * v16f_set1(W[6 + j]);
+    T1[j] = J11 * v16f_set1(W[3 + j]) + J12 * v16f_set1(W[6 + j]);
+  }
+  v16f ST00 = S0 * T0[0] + S1 * T0[1] + S2 * T0[2];
+  v16f ST01 = S1 * T0[0] + S3 * T0[1] + S4 * T0[2];
+  v16f ST02 = S2 * T0[0] + S4 * T0[1] + S5 * T0[2];
+  v16f ST10 = S0 * T1[0] + S1 * T1[1] + S2 * T1[2];
+  v16f ST11 = S1 * T1[0] + S3 * T1[1] + S4 * T1[2];
+  v16f ST12 = S2 * T1[0] + S4 * T1[1] + S5 * T1[2];
+  v16f dil = v16f_set1(r->s.dilation);
+  v16f a = T0[0] * ST00 + T0[1] * ST01 + T0[2] * ST02 + dil;
+  v16f b = T0[0] * ST10 + T0[1] * ST11 + T0[2] * ST12;
+  v16f c = T1[0] * ST10 + T1[1] * ST11 + T1[2] * ST12 + dil;
+  v16f det = a * c - b * b;
+  v16f idet = one / det;
+  v16f mid = v16f_set1(0.5f) * (a + c);
+  v16f l1 = mid + v16f_sqrt(v16f_max(v16f_set1(0.1f), mid * mid - det));
+  v16f radius = v16f_ceil(v16f_set1(3.0f) * v16f_sqrt(v16f_max(l1, zero)));
+  v16f op = one / (one + v16f_exp(zero - v16f_load(pb->logit)));
+  for (int k = 0; k < 9; k++) v16f_store(pb->R[k], R[k]);
+  for (int k = 0; k < 3; k++) { v16f_store(pb->s[k], sv[k]); v16f_store(pb->T0[k], T0[k]); v16f_store(pb->T1[k], T1[k]); }
+  v16f_store(pb->a, a); v16f_store(pb->b, b); v16f_store(pb->c, c); v16f_store(pb->det, det);
+  v16f_store(pb->A, c * idet); v16f_store(pb->B, zero - b * idet); v16f_store(pb->C, a * idet);
+  v16f_store(pb->radius, radius); v16f_store(pb->op, op);
+  v16f_store(pb->txc, txc); v16f_store(pb->tyc, tyc);
+}
+
+static void project_block(const proj_ctx *pc, size_t i0, int nl) {
+  mgs_raster *r = pc->r;
+  const mgs_gaussians *g = r->g;
+  const mgs_camera *cam = &r->cam;
+  const double *V = cam->w2c;
+  proj_block pb;
+  pb.n = nl;
+  /* lane setup: double transform, early culling, parameters (unused lanes benign) */
+  for (int l = 0; l < 16; l++) {
+    size_t i = i0 + (size_t)l;
+    int ok = l < nl;
+    double td[3] = {0, 0, 1};
+    if (ok) {
+      double m[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]};
+      for (int k = 0; k < 3; k++) td[k] = V[4 * k] * m[0] + V[4 * k + 1] * m[1] + V[4 * k + 2] * m[2] + V[4 * k + 3];
+      const float *qq = g->rot + 4 * i;
+      /* a diverged parameter culls the Gaussian (scales and SH are caught below) */
+      ok = td[2] > r->s.near_plane && isfinite(td[0]) && isfinite(td[1]) && isfinite(td[2]) &&
+           isfinite(qq[0] + qq[1] + qq[2] + qq[3]) && isfinite(g->opacity[i]);
+      if (!ok) { cull(r, i); td[0] = td[1] = 0; td[2] = 1; }
+    }
+    pb.alive[l] = ok;
+    for (int k = 0; k < 3; k++) pb.td[k][l] = td[k];
+    pb.tx[l] = (float)td[0]; pb.ty[l] = (float)td[1]; pb.tz[l] = (float)td[2];
+    for (int k = 0; k < 4; k++) pb.q[k][l] = ok ? g->rot[4 * i + k] : (k == 0);
+    for (int k = 0; k < 3; k++) pb.ls[k][l] = ok ? g->log_scale[3 * i + k] : 0.0f;
+    pb.logit[l] = ok ? g->opacity[i] : 0.0f;
+  }
+  block_vector_part(pc, &pb);
+  for (int l = 0; l < nl; l++) {
+    if (!pb.alive[l]) continue;
+    size_t i = i0 + (size_t)l;
+    float a = pb.a[l], c = pb.c[l], det = pb.det[l], radius = pb.radius[l];
+    float A = pb.A[l], B = pb.B[l], C = pb.C[l];
+    if (!(det > 0) || !isfinite(det)) { cull(r, i); continue; }
+    double td[3] = {pb.td[0][l], pb.td[1][l], pb.td[2][l]};
+    double izd = 1.0 / td[2];
+    double ud = cam->fx * td[0] * izd + cam->cx, vd = cam->fy * td[1] * izd + cam->cy;
+    if (!isfinite(ud) || !isfinite(vd) || !isfinite(radius) || !isfinite(A) || !isfinite(B) || !isfinite(C)) {
+      cull(r, i); continue;
+    }
+    /* the reference's getRect, in its pixel coordinates (centres at integers) */
+    double px = ud - 0.5, py = vd - 0.5;
+    int x0 = clamp_tile((px - radius) / MGS_TILE_SIZE, r->tiles_x);
+    int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) / MGS_TILE_SIZE, r->tiles_x);
+    int y0 = clamp_tile((py - radius) / MGS_TILE_SIZE, r->tiles_y);
+    int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) / MGS_TILE_SIZE, r->tiles_y);
+    if ((x1 - x0) * (y1 - y0) == 0) { cull(r, i); continue; }
+
+    float op = pb.op[l];
+    /* colour from SH, view direction in double (far-from-origin scenes) */
+    mgs_proj_aux *ax = &r->aux[i];
+    double dd[3] = {g->mean[3 * i] - pc->campos[0], g->mean[3 * i + 1] - pc->campos[1], g->mean[3 * i + 2] - pc->campos[2]};
+    double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+    float dir[3] = {0, 0, 0};
+    if (dist > 0) {
+      double id = 1.0 / dist;
+      for (int k = 0; k < 3; k++) dir[k] = (float)(dd[k] * id);
+    }
+    float rgb[3];
+    mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, dir, rgb);
+    mgs_splat *sp = &r->splat[i];
+    for (int k = 0; k < 3; k++) {
+      ax->clamped[k] = rgb[k] < 0;
+      sp->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
+      ax->dir[k] = dir[k];
+    }
+    if (!isfinite(sp->rgb[0]) || !isfinite(sp->rgb[1]) || !isfinite(sp->rgb[2])) { cull(r, i); continue; }
+    ax->dist = (float)dist;
+    ax->t[0] = pb.tx[l]; ax->t[1] = pb.ty[l]; ax->t[2] = pb.tz[l];
+    ax->txc = pb.txc[l]; ax->tyc = pb.tyc[l];
+    for (int k = 0; k < 9; k++) ax->R[k] = pb.R[k][l];
+    for (int k = 0; k < 3; k++) { ax->s[k] = pb.s[k][l]; ax->T0[k] = pb.T0[k][l]; ax->T1[k] = pb.T1[k][l]; }
+    ax->clampx = (uint8_t)(pb.clx[l] != 0); ax->clampy = (uint8_t)(pb.cly[l] != 0);
+    sp->u = (float)ud; sp->v = (float)vd;
+    sp->A = A; sp->B = B; sp->C = C;
+    sp->opacity = op;
+    sp->z = pb.tz[l];
+    r->radii[i] = (int)radius;
+
+    /* Tighter, equivalent binning: outside the ellipse where opacity*G >= 1/255 nothing
+     * is drawn, so tiles of the reference rect that miss its bounding box are dropped.
+     * Conservative margins keep the result identical to evaluating the whole rect. */
+    if (op < MGS_ALPHA_MIN) { r->count[i] = 0; sp->ry = 0; continue; }
+    float r2 = 2.0f * logf(op / MGS_ALPHA_MIN);
+    float hx = sqrtf(r2 * a), hy = sqrtf(r2 * c);
+    float mx = 1e-3f * hx + 0.02f, my = 1e-3f * hy + 0.02f;
+    int bx0 = clamp_tile(floor((ud - hx - 0.5 - mx) / MGS_TILE_SIZE), r->tiles_x);
+    int bx1 = clamp_tile(floor((ud + hx - 0.5 + mx) / MGS_TILE_SIZE) + 1, r->tiles_x);
+    int by0 = clamp_tile(floor((vd - hy - 0.5 - my) / MGS_TILE_SIZE), r->tiles_y);
+    int by1 = clamp_tile(floor((vd + hy - 0.5 + my) / MGS_TILE_SIZE) + 1, r->tiles_y);
+    if (bx0 > x0) x0 = bx0;
+    if (bx1 < x1) x1 = bx1;
+    if (by0 > y0) y0 = by0;
+    if (by1 < y1) y1 = by1;
+    sp->ry = hy + my;
+    if (x1 <= x0 || y1 <= y0) { r->count[i] = 0; continue; }
+    uint16_t *rc = r->rect + 4 * i;
+    rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
+    r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+  }
+}
+
+static void project_range(void *ctx, size_t b, size_t e) {
+  const proj_ctx *pc = ctx;
+  for (size_t i = b * 16; i < e * 16 && i < pc->r->n; i += 16) {
+    size_t left = pc->r->n - i;
+    project_block(pc, i, left < 16 ? (int)left : 16);
+  }
+}
+
+void mgs_raster_project_all(mgs_raster *r) {
+  proj_ctx pc;
+  pc.r = r;
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++) pc.W[3 * a + b] = (float)r->cam.w2c[4 * a + b];
+  jacobian_limits(&r->cam, pc.lx, pc.ly);
+  mgs_camera_center(&r->cam, pc.campos);
+  mgs_parallel_for(0, (r->n + 15) / 16, 64, project_range, &pc); /* blocks of 16 */
+}
+
+/* Backward of the projection for up to 16 binned Gaussians at once: idx[0..nl) their
+ * indices, gsum[c][l] the tile kernels' summed gradient c of lane l. The geometric chain
+ * (conic -> 2D covariance -> Sigma, J, camera-space mean -> scales, quaternion, mean) runs
+ * 16-wide; the SH backward and the additions into grad run per lane. Adds into grad. */
+void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, float gsum[GS_N][16],
+                                   mgs_gaussians *grad, float *grad_mean2d) {
+  const mgs_gaussians *g = r->g;
+  const mgs_camera *cam = &r->cam;
+  float Rl[9][16], sl[3][16], T0l[3][16], T1l[3][16], tl[3][16], txcl[16], tycl[16], Kl[3][16], ql[4][16];
+  int32_t clxl[16], clyl[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    size_t i = ok ? idx[l] : idx[0];
+    const mgs_proj_aux *ax = &r->aux[i];
+    const mgs_splat *sp = &r->splat[i];
+    for (int k = 0; k < 9; k++) Rl[k][l] = ax->R[k];
+    for (int k = 0; k < 3; k++) {
+      sl[k][l] = ax->s[k]; T0l[k][l] = ax->T0[k]; T1l[k][l] = ax->T1[k]; tl[k][l] = ax->t[k];
+    }
+    txcl[l] = ax->txc; tycl[l] = ax->tyc;
+    clxl[l] = ax->clampx ? -1 : 0; clyl[l] = ax->clampy ? -1 : 0;
+    Kl[0][l] = sp->A; Kl[1][l] = sp->B; Kl[2][l] = sp->C;
+    for (int k = 0; k < 4; k++) ql[k][l] = g->rot[4 * i + k];
+    if (!ok) for (int c = 0; c < GS_N; c++) gsum[c][l] = 0;
+  }
+  float W[9];
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++) W[3 * a + b] = (float)cam->w2c[4 * a + b];
+  const float fx = (float)cam->fx, fy = (float)cam->fy;
+  const v16f zero = v16f_set1(0.0f);
+
+  /* conic -> 2D covariance: dL/dcov = -K G K */
+  v16f K00 = v16f_load(Kl[0]), K01 = v16f_load(Kl[1]), K11 = v16f_load(Kl[2]);
+  v16f G00 = v16f_load(gsum[GS_A]), G01 = 0.5f * v16f_load(gsum[GS_B2]), G11 = v16f_load(gsum[GS_C]);
+  v16f KG00 = K00 * G00 + K01 * G01, KG01 = K00 * G01 + K01 * G11;
+  v16f KG10 = K01 * G00 + K11 * G01, KG11 = K01 * G01 + K11 * G11;
+  v16f C00 = zero - (KG00 * K00 + KG01 * K01);
+  v16f C01 = zero - (KG00 * K01 + KG01 * K11);
+  v16f C11 = zero - (KG10 * K01 + KG11 * K11);
+  v16f T0[3], T1[3], R[9], s[3], M[9];
+  for (int k = 0; k < 3; k++) { T0[k] = v16f_load(T0l[k]); T1[k] = v16f_load(T1l[k]); s[k] = v16f_load(sl[k]); }
+  for (int k = 0; k < 9; k++) R[k] = v16f_load(Rl[k]);
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++) M[3 * a + k] = R[3 * a + k] * s[k];
+  v16f Sg[9];
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++) Sg[3 * a + b] = M[3 * a] * M[3 * b] + M[3 * a + 1] * M[3 * b + 1] + M[3 * a + 2] * M[3 * b + 2];
+  v16f dS[9];
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++)
+      dS[3 * a + b] = T0[a] * (C00 * T0[b] + C01 * T1[b]) + T1[a] * (C01 * T0[b] + C11 * T1[b]);
+  v16f TS0[3], TS1[3];
+  for (int b = 0; b < 3; b++) {
+    TS0[b] = T0[0] * Sg[b] + T0[1] * Sg[3 + b] + T0[2] * Sg[6 + b];
+    TS1[b] = T1[0] * Sg[b] + T1[1] * Sg[3 + b] + T1[2] * Sg[6 + b];
+  }
+  v16f dT0[3], dT1[3];
+  for (int b = 0; b < 3; b++) {
+    dT0[b] = 2.0f * (C00 * TS0[b] + C01 * TS1[b]);
+    dT1[b] = 2.0f * (C01 * TS0[b] + C11 * TS1[b]);
+  }
+  v16f dJ00 = dT0[0] * W[0] + dT0[1] * W[1] + dT0[2] * W[2];
+  v16f dJ02 = dT0[0] * W[6] + dT0[1] * W[7] + dT0[2] * W[8];
+  v16f dJ11 = dT1[0] * W[3] + dT1[1] * W[4] + dT1[2] * W[5];
+  v16f dJ12 = dT1[0] * W[6] + dT1[1] * W[7] + dT1[2] * W[8];
+  v16f tx = v16f_load(tl[0]), ty = v16f_load(tl[1]), tz = v16f_load(tl[2]);
+  v16f txc = v16f_load(txcl), tyc = v16f_load(tycl);
+  v16i clx = v16i_load(clxl), cly = v16i_load(clyl);
+  v16f iz = 1.0f / tz, iz2 = iz * iz, iz3 = iz2 * iz;
+  v16f dt0 = zero, dt1 = zero, dt2 = zero - fx * iz2 * dJ00 - fy * iz2 * dJ11;
+  /* J02 = -fx*txc/z^2 with txc = x (free) or lim*z (clamped) */
+  dt2 += v16f_select(clx, fx * txc * iz3 * dJ02, 2.0f * fx * txc * iz3 * dJ02);
+  dt0 += v16f_and(~clx, zero - fx * iz2 * dJ02);
+  dt2 += v16f_select(cly, fy * tyc * iz3 * dJ12, 2.0f * fy * tyc * iz3 * dJ12);
+  dt1 += v16f_and(~cly, zero - fy * iz2 * dJ12);
+  v16f gu = v16f_load(gsum[GS_U]), gv = v16f_load(gsum[GS_V]);
+  dt0 += gu * fx * iz;
+  dt1 += gv * fy * iz;
+  dt2 += zero - gu * fx * tx * iz2 - gv * fy * ty * iz2;
+  dt2 += v16f_load(gsum[GS_Z]);
+  float dm[3][16];
+  for (int k = 0; k < 3; k++) v16f_store(dm[k], W[k] * dt0 + W[3 + k] * dt1 + W[6 + k] * dt2);
+  /* Sigma = M M^T, M = R S */
+  v16f dM[9];
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++)
+      dM[3 * a + k] = 2.0f * (dS[3 * a] * M[k] + dS[3 * a + 1] * M[3 + k] + dS[3 * a + 2] * M[6 + k]);
+  v16f dR[9];
+  float dls[3][16];
+  for (int k = 0; k < 3; k++) {
+    v16f dsk = dM[k] * R[k] + dM[3 + k] * R[3 + k] + dM[6 + k] * R[6 + k];
+    v16f_store(dls[k], dsk * s[k]);
+    for (int a = 0; a < 3; a++) dR[3 * a + k] = dM[3 * a + k] * s[k];
+  }
+  v16f q0 = v16f_load(ql[0]), q1 = v16f_load(ql[1]), q2 = v16f_load(ql[2]), q3 = v16f_load(ql[3]);
+  v16f qn2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3;
+  v16i qok = qn2 > zero;
+  v16f qn = v16f_sqrt(v16f_select(qok, qn2, v16f_set1(1.0f)));
+  v16f iqn = 1.0f / qn;
+  v16f w = q0 * iqn, x = q1 * iqn, y = q2 * iqn, z = q3 * iqn;
+  v16f gq[4];
+  gq[0] = 2.0f * (zero - z * dR[1] + y * dR[2] + z * dR[3] - x * dR[5] - y * dR[6] + x * dR[7]);
+  gq[1] = 2.0f * (y * dR[1] + z * dR[2] + y * dR[3] - 2.0f * x * dR[4] - w * dR[5] + z * dR[6] + w * dR[7] - 2.0f * x * dR[8]);
+  gq[2] = 2.0f * (zero - 2.0f * y * dR[0] + x * dR[1] + w * dR[2] + x * dR[3] + z * dR[5] - w * dR[6] + z * dR[7] - 2.0f * y * dR[8]);
+  gq[3] = 2.0f * (zero - 2.0f * z * dR[0] - w * dR[1] + x * dR[2] + w * dR[3] - 2.0f * z * dR[4] + y * dR[5] + x * dR[6] + y * dR[7]);
+  v16f qd = w * gq[0] + x * gq[1] + y * gq[2] + z * gq[3];
+  v16f qv[4] = {w, x, y, z};
+  float dq[4][16];
+  for (int k = 0; k < 4; k++) v16f_store(dq[k], v16f_and(qok, (gq[k] - qv[k] * qd) * iqn));
+  float gm[16];
+  {
+    v16f nx = gu * (0.5f * (float)cam->width), ny = gv * (0.5f * (float)cam->height);
+    v16f_store(gm, v16f_sqrt(nx * nx + ny * ny));
+  }
+  /* per lane: SH backward, the view-direction part of the mean, the additions */
+  for (int l = 0; l < nl; l++) {
+    size_t i = idx[l];
+    const mgs_proj_aux *ax = &r->aux[i];
+    const mgs_splat *sp = &r->splat[i];
+    float dmean[3] = {dm[0][l], dm[1][l], dm[2][l]};
+    float drgb[3], ddir[3];
+    for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gsum[GS_R + k][l];
+    mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir,
+                    drgb, grad->sh_dc + 3 * i, grad->sh_rest + (size_t)MGS_SH_REST_MAX * i, ddir);
+    if (ax->dist > 0) {
+      float dd = ax->dir[0] * ddir[0] + ax->dir[1] * ddir[1] + ax->dir[2] * ddir[2];
+      for (int k = 0; k < 3; k++) dmean[k] += (ddir[k] - ax->dir[k] * dd) / ax->dist;
+    }
+    for (int k = 0; k < 3; k++) grad->mean[3 * i + k] += dmean[k];
+    grad->opacity[i] += gsum[GS_OP][l] * sp->opacity * (1.0f - sp->opacity);
+    for (int k = 0; k < 3; k++) grad->log_scale[3 * i + k] += dls[k][l];
+    for (int k = 0; k < 4; k++) grad->rot[4 * i + k] += dq[k][l];
+    if (grad_mean2d) grad_mean2d[i] = gm[l];
+  }
+}

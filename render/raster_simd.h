@@ -1,0 +1,140 @@
+/* 16-wide float vectors (one tile row of 16 pixels) for the rasterizer's inner loops, as
+ * GCC/Clang vector extensions: with -march=native on AVX-512 one vector is one register,
+ * on AVX2 two, and any other target still compiles. Also the one exp() both the forward
+ * and the backward use, so that both take bit-identical alpha decisions. Internal. */
+#ifndef MGS_RASTER_SIMD_H
+#define MGS_RASTER_SIMD_H
+#include <stdint.h>
+#include <math.h>
+#include <string.h>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+#if defined(__GNUC__) && !defined(__clang__)
+/* 64-byte vectors passed between MGS_VINLINE functions: no ABI is involved, but GCC
+ * warns about one on targets without AVX-512 */
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+/* always inlined: no 64-byte vector ever crosses a call boundary */
+#define MGS_VINLINE static inline __attribute__((always_inline))
+
+typedef float v16f __attribute__((vector_size(64)));
+typedef int32_t v16i __attribute__((vector_size(64)));
+
+MGS_VINLINE v16f v16f_set1(float x) { return (v16f){x, x, x, x, x, x, x, x, x, x, x, x, x, x, x, x}; }
+MGS_VINLINE v16i v16i_set1(int32_t x) { return (v16i){x, x, x, x, x, x, x, x, x, x, x, x, x, x, x, x}; }
+MGS_VINLINE v16f v16f_load(const float *p) { v16f v; memcpy(&v, p, sizeof v); return v; }
+MGS_VINLINE void v16f_store(float *p, v16f v) { memcpy(p, &v, sizeof v); }
+MGS_VINLINE v16i v16i_load(const int32_t *p) { v16i v; memcpy(&v, p, sizeof v); return v; }
+MGS_VINLINE void v16i_store(int32_t *p, v16i v) { memcpy(p, &v, sizeof v); }
+/* m: lanes all-ones or zero (the result of a vector comparison). */
+MGS_VINLINE v16f v16f_select(v16i m, v16f a, v16f b) { return (v16f)((m & (v16i)a) | (~m & (v16i)b)); }
+MGS_VINLINE v16f v16f_and(v16i m, v16f a) { return (v16f)(m & (v16i)a); }
+MGS_VINLINE v16f v16f_min(v16f a, v16f b) { return v16f_select(a < b, a, b); }
+MGS_VINLINE v16f v16f_max(v16f a, v16f b) { return v16f_select(a > b, a, b); }
+/* a*b + c, fused where the target has FMA (explicit, so that the result does not depend
+ * on the compiler's contraction choices: forward and backward must agree bit for bit) */
+MGS_VINLINE v16f v16f_fma(v16f a, v16f b, v16f c) {
+#if defined(__AVX512F__)
+  return (v16f)_mm512_fmadd_ps((__m512)a, (__m512)b, (__m512)c);
+#else
+  return a * b + c;
+#endif
+}
+/* 1/x to about 1 ulp: hardware estimate + one Newton step (a 512-bit divide has a
+ * fraction of the throughput). Used where the value feeds no threshold decision. */
+MGS_VINLINE v16f v16f_rcp(v16f x) {
+#if defined(__AVX512F__)
+  v16f r = (v16f)_mm512_rcp14_ps((__m512)x);
+  return r * v16f_fma(v16f_set1(-1.0f) * x, r, v16f_set1(2.0f));
+#else
+  return v16f_set1(1.0f) / x;
+#endif
+}
+MGS_VINLINE int v16i_any(v16i m) {
+#if defined(__AVX512F__)
+  return _mm512_test_epi32_mask((__m512i)m, (__m512i)m) != 0;
+#else
+  int32_t t[16]; memcpy(t, &m, sizeof t);
+  int32_t r = 0;
+  for (int i = 0; i < 16; i++) r |= t[i];
+  return r != 0;
+#endif
+}
+MGS_VINLINE float v16f_sum(v16f v) {
+#if defined(__AVX512F__)
+  return _mm512_reduce_add_ps((__m512)v);
+#else
+  float t[16]; memcpy(t, &v, sizeof t);
+  float a = 0;
+  for (int i = 0; i < 16; i++) a += t[i];
+  return a;
+#endif
+}
+
+MGS_VINLINE v16f v16f_sqrt(v16f x) {
+#if defined(__AVX512F__)
+  return (v16f)_mm512_sqrt_ps((__m512)x);
+#else
+  v16f r;
+  for (int i = 0; i < 16; i++) r[i] = sqrtf(x[i]);
+  return r;
+#endif
+}
+MGS_VINLINE v16f v16f_ceil(v16f x) {
+#if defined(__AVX512F__)
+  return (v16f)_mm512_roundscale_ps((__m512)x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+#else
+  v16f r;
+  for (int i = 0; i < 16; i++) r[i] = ceilf(x[i]);
+  return r;
+#endif
+}
+
+/* exp(x) for x <= 0 (Cephes expf polynomial, about 1 ulp), with x clamped below at -12:
+ * the rasterizer only uses values with opacity*exp(x) >= 1/255, i.e. x > -5.55, and the
+ * clamp keeps every product downstream far from denormals (whose microcode assists made
+ * tiny Gaussians several times slower). Bit-identical in the forward and the backward,
+ * which is what matters. */
+MGS_VINLINE v16f v16f_exp_neg(v16f x) {
+  x = v16f_max(x, v16f_set1(-12.0f));
+  /* round to nearest via the 1.5*2^23 trick (|x*log2e| < 126) */
+  const v16f magic = v16f_set1(12582912.0f);
+  v16f n = v16f_fma(x, v16f_set1(1.44269504088896341f), magic) - magic;
+  v16f r = v16f_fma(n, v16f_set1(-0.693359375f), x);
+  r = v16f_fma(n, v16f_set1(2.12194440e-4f), r);
+  v16f z = r * r;
+  v16f y = v16f_set1(1.9875691500E-4f);
+  y = v16f_fma(y, r, v16f_set1(1.3981999507E-3f));
+  y = v16f_fma(y, r, v16f_set1(8.3334519073E-3f));
+  y = v16f_fma(y, r, v16f_set1(4.1665795894E-2f));
+  y = v16f_fma(y, r, v16f_set1(1.6666665459E-1f));
+  y = v16f_fma(y, r, v16f_set1(5.0000001201E-1f));
+  y = v16f_fma(y, z, r + v16f_set1(1.0f));
+  v16i e = __builtin_convertvector(n, v16i);
+  v16i bits = (e + 127) << 23;
+  return y * (v16f)bits;
+}
+/* exp(x) over the float range (Cephes, about 1 ulp); x clamped to [-87, 88] so the result
+ * stays a normal float (e^88 ~ 1.7e38: still overflows whatever it multiplies). */
+MGS_VINLINE v16f v16f_exp(v16f x) {
+  x = v16f_min(v16f_max(x, v16f_set1(-87.0f)), v16f_set1(88.0f));
+  const v16f magic = v16f_set1(12582912.0f);
+  v16f n = v16f_fma(x, v16f_set1(1.44269504088896341f), magic) - magic;
+  v16f r = v16f_fma(n, v16f_set1(-0.693359375f), x);
+  r = v16f_fma(n, v16f_set1(2.12194440e-4f), r);
+  v16f z = r * r;
+  v16f y = v16f_set1(1.9875691500E-4f);
+  y = v16f_fma(y, r, v16f_set1(1.3981999507E-3f));
+  y = v16f_fma(y, r, v16f_set1(8.3334519073E-3f));
+  y = v16f_fma(y, r, v16f_set1(4.1665795894E-2f));
+  y = v16f_fma(y, r, v16f_set1(1.6666665459E-1f));
+  y = v16f_fma(y, r, v16f_set1(5.0000001201E-1f));
+  y = v16f_fma(y, z, r + v16f_set1(1.0f));
+  /* 2^n in two halves so that n = 128 (x near 88.7) does not overflow the exponent field */
+  v16i e = __builtin_convertvector(n, v16i);
+  v16i e1 = e >> 1, e2 = e - e1;
+  return y * (v16f)((e1 + 127) << 23) * (v16f)((e2 + 127) << 23);
+}
+#endif

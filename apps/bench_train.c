@@ -1,4 +1,284 @@
-/* PLACEHOLDER: replaced by the implementation of `morsegs bench train`. */
+/* morsegs bench train: test PSNR against wall time for the built-in scenes (datasets made
+ * by `morsegs scene --builtin`), plus a run matched to the OpenSplat CPU figures of
+ * PEERS.md (200x200, 2000 Gaussians, SH 3, no densification, 1000 iterations).
+ * Writes OUT/train.csv, OUT/train.md (tables) and OUT/train.png (PSNR against time). */
+#include <getopt.h>
+#include <limits.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <cairo.h>
 #include "apps/mgs_cli.h"
-int mgs_bench_train(int argc, char **argv) { (void)argc; (void)argv; fprintf(stderr, "morsegs bench train: not implemented yet\n"); return 1; }
+#include "core/mgs_core.h"
+#include "train/mgs_train.h"
+#include "train/mgs_strategy.h"
+
+typedef struct {
+  char scene[32];
+  char config[32];
+  int iteration;
+  double seconds, ms_per_iter, cpu_ms_per_iter, psnr, ssim;
+  double phase_ms[MGS_TRAIN_PHASES]; /* per iteration in the segment */
+  size_t gaussians;
+} sample;
+
+typedef struct {
+  sample *s;
+  size_t n, cap;
+} samples;
+
+static void push(samples *ss, const sample *x) {
+  if (ss->n == ss->cap) {
+    size_t cap = ss->cap ? 2 * ss->cap : 64;
+    sample *p = realloc(ss->s, cap * sizeof *p);
+    if (!p) return;
+    ss->s = p; ss->cap = cap;
+  }
+  ss->s[ss->n++] = *x;
+}
+
+static void usage(FILE *f) {
+  fprintf(f,
+    "usage: morsegs bench train [options]\n"
+    "  --full              7000 iterations at 200x200 on every built-in scene (default: 2000 on 'sphere')\n"
+    "  --scenes A,B        built-in scenes (sphere, genus2, thin)\n"
+    "  --iters N           iterations per scene\n"
+    "  --res N             image size NxN (200)\n"
+    "  --random N          random init of N Gaussians in [-1.3,1.3]^3 (the reference's NeRF-synthetic\n"
+    "                      init) instead of the scene's surface points\n"
+    "  --no-densify        no density control (fixed Gaussian count)\n"
+    "  --no-peer           skip the OpenSplat-matched run (2000 Gaussians, no densification, 1000 it)\n"
+    "  --work DIR          where the datasets are made (/tmp/mgs-bench-train)\n"
+    "  -o, --output DIR    CSV, tables and plot (bench/train)\n"
+    "  --threads N         worker threads (all cores)\n");
+}
+
+static int make_scene(const char *name, const char *dir, int res) {
+  char ds_json[PATH_MAX];
+  snprintf(ds_json, sizeof ds_json, "%s/transforms_train.json", dir);
+  if (mgs_path_exists(ds_json)) return 0; /* made by an earlier run */
+  char w[16], h[16];
+  snprintf(w, sizeof w, "%d", res);
+  snprintf(h, sizeof h, "%d", res);
+  char *argv[] = {"scene", "--builtin", (char *)name, "-o", (char *)dir, "--width", w, "--height", h, "-q", "--force", NULL};
+  return mgs_cmd_scene(11, argv);
+}
+
+/* Trains one configuration, evaluating the test split at the given iterations. */
+static mgs_status run_config(const char *scene, const char *config, const char *dir, int iters, int init_points,
+                             int random_init, int densify, const int *evals, int n_evals, samples *out, mgs_error *err) {
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  o.load_images = 1;
+  mgs_dataset *ds = NULL;
+  mgs_status st = mgs_dataset_load(dir, &o, &ds, err);
+  if (st) return st;
+  mgs_train_options to;
+  mgs_train_options_default(&to);
+  to.iterations = iters;
+  to.seed = 1;
+  to.adc.white_background = o.white_background;
+  mgs_gaussians *g = NULL;
+  if (!random_init && ds->init_points && ds->init_points->n > 0) {
+    size_t n = ds->init_points->n;
+    if (init_points > 0 && (size_t)init_points < n) n = (size_t)init_points;
+    st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, n, 3, &g, err);
+  } else {
+    mgs_rng r;
+    mgs_rng_init(&r, 1, 1);
+    double lo[3] = {-1.3, -1.3, -1.3}, hi[3] = {1.3, 1.3, 1.3};
+    st = mgs_init_random(init_points > 0 ? (size_t)init_points : 100000, lo, hi, 3, &r, &g, err);
+  }
+  mgs_trainer *t = NULL;
+  if (st == MGS_OK) st = mgs_trainer_create(ds, &to, g, densify ? mgs_strategy_adc_create(&to.adc) : NULL, &t, err);
+  double last_s = 0, last_ph[MGS_TRAIN_PHASES] = {0};
+  int last_it = 0;
+  printf("%-8s %-10s %6s %9s %9s %9s %9s %8s %10s   %s\n", "scene", "config", "iter", "time s", "ms/iter", "cpu ms/it",
+         "PSNR", "SSIM", "Gaussians", "ms/iter: fwd loss bwd strategy adam");
+  for (int e = 0; e < n_evals && st == MGS_OK; e++) {
+    if (evals[e] > iters) break;
+    clock_t c0 = clock();
+    if ((st = mgs_trainer_run_until(t, evals[e], err))) break;
+    double cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
+    sample s;
+    memset(&s, 0, sizeof s);
+    snprintf(s.scene, sizeof s.scene, "%s", scene);
+    snprintf(s.config, sizeof s.config, "%s", config);
+    s.iteration = mgs_trainer_iteration(t);
+    s.seconds = mgs_trainer_seconds(t);
+    s.ms_per_iter = 1000.0 * (s.seconds - last_s) / (double)(s.iteration - last_it);
+    s.cpu_ms_per_iter = 1000.0 * cpu / (double)(s.iteration - last_it);
+    s.gaussians = mgs_trainer_model(t)->n;
+    double ph[MGS_TRAIN_PHASES];
+    mgs_trainer_phase_seconds(t, ph);
+    for (int k = 0; k < MGS_TRAIN_PHASES; k++) {
+      s.phase_ms[k] = 1000.0 * (ph[k] - last_ph[k]) / (double)(s.iteration - last_it);
+      last_ph[k] = ph[k];
+    }
+    if ((st = mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &s.psnr, &s.ssim, err))) break;
+    last_s = s.seconds;
+    last_it = s.iteration;
+    printf("%-8s %-10s %6d %9.1f %9.2f %9.2f %9.3f %8.4f %10zu   %.1f %.1f %.1f %.1f %.1f\n", s.scene, s.config, s.iteration,
+           s.seconds, s.ms_per_iter, s.cpu_ms_per_iter, s.psnr, s.ssim, s.gaussians, s.phase_ms[0], s.phase_ms[1], s.phase_ms[2],
+           s.phase_ms[3], s.phase_ms[4]);
+    fflush(stdout);
+    push(out, &s);
+  }
+  mgs_trainer_destroy(t);
+  mgs_dataset_destroy(ds);
+  return st;
+}
+
+static void plot(const samples *ss, const char *path) {
+  const int W = 800, H = 500, L = 70, R = 20, T = 30, B = 50;
+  double tmax = 0, pmin = 1e9, pmax = -1e9;
+  for (size_t i = 0; i < ss->n; i++) {
+    tmax = fmax(tmax, ss->s[i].seconds);
+    pmin = fmin(pmin, ss->s[i].psnr);
+    pmax = fmax(pmax, ss->s[i].psnr);
+  }
+  if (ss->n == 0 || tmax <= 0) return;
+  pmin = floor(pmin) - 1; pmax = ceil(pmax) + 1;
+  cairo_surface_t *sf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W, H);
+  cairo_t *cr = cairo_create(sf);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_set_line_width(cr, 1);
+  cairo_rectangle(cr, L, T, W - L - R, H - T - B);
+  cairo_stroke(cr);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 12);
+  char buf[96];
+  for (int k = 0; k <= 5; k++) {
+    double tx = tmax * k / 5, py = pmin + (pmax - pmin) * k / 5;
+    double x = L + (W - L - R) * k / 5.0, y = H - B - (H - T - B) * k / 5.0;
+    snprintf(buf, sizeof buf, "%.0f", tx);
+    cairo_move_to(cr, x - 10, H - B + 18); cairo_show_text(cr, buf);
+    snprintf(buf, sizeof buf, "%.1f", py);
+    cairo_move_to(cr, 20, y + 4); cairo_show_text(cr, buf);
+  }
+  cairo_move_to(cr, W / 2 - 60, H - 12); cairo_show_text(cr, "training wall time (s)");
+  cairo_move_to(cr, L, 20); cairo_show_text(cr, "test PSNR (dB) against training time, morsegs bench train");
+  static const double col[6][3] = {{0.8, 0.1, 0.1}, {0.1, 0.4, 0.8}, {0.1, 0.6, 0.2}, {0.6, 0.3, 0.7}, {0.9, 0.5, 0.0}, {0.3, 0.3, 0.3}};
+  int series = 0;
+  for (size_t i = 0; i < ss->n;) {
+    size_t j = i;
+    while (j < ss->n && !strcmp(ss->s[j].scene, ss->s[i].scene) && !strcmp(ss->s[j].config, ss->s[i].config)) j++;
+    const double *c = col[series % 6];
+    cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+    cairo_set_line_width(cr, 2);
+    for (size_t k = i; k < j; k++) {
+      double x = L + (W - L - R) * ss->s[k].seconds / tmax;
+      double y = H - B - (H - T - B) * (ss->s[k].psnr - pmin) / (pmax - pmin);
+      if (k == i) cairo_move_to(cr, x, y); else cairo_line_to(cr, x, y);
+    }
+    cairo_stroke(cr);
+    for (size_t k = i; k < j; k++) {
+      double x = L + (W - L - R) * ss->s[k].seconds / tmax;
+      double y = H - B - (H - T - B) * (ss->s[k].psnr - pmin) / (pmax - pmin);
+      cairo_arc(cr, x, y, 3, 0, 2 * MGS_PI);
+      cairo_fill(cr);
+    }
+    snprintf(buf, sizeof buf, "%s / %s", ss->s[i].scene, ss->s[i].config);
+    cairo_move_to(cr, W - R - 190, H - B - 20 - 16 * series);
+    cairo_show_text(cr, buf);
+    series++;
+    i = j;
+  }
+  cairo_destroy(cr);
+  cairo_surface_write_to_png(sf, path);
+  cairo_surface_destroy(sf);
+}
+
+int mgs_bench_train(int argc, char **argv) {
+  static const struct option opts[] = {{"full", no_argument, 0, 'F'}, {"scenes", required_argument, 0, 's'},
+                                       {"iters", required_argument, 0, 'i'}, {"res", required_argument, 0, 'r'},
+                                       {"no-peer", no_argument, 0, 'P'}, {"random", required_argument, 0, 'R'},
+                                       {"no-densify", no_argument, 0, 'D'}, {"work", required_argument, 0, 'w'},
+                                       {"output", required_argument, 0, 'o'}, {"threads", required_argument, 0, 't'},
+                                       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  int full = 0, iters = 0, res = 200, peer = 1, threads = 0, random_n = 0, densify = 1, c;
+  const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train";
+  optind = 1;
+  while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    switch (c) {
+      case 'F': full = 1; break;
+      case 's': scenes = optarg; break;
+      case 'i': iters = atoi(optarg); if (iters < 1) { fprintf(stderr, "morsegs bench train: --iters needs N >= 1\n"); return 2; } break;
+      case 'r': res = atoi(optarg); if (res < 16) { fprintf(stderr, "morsegs bench train: --res needs N >= 16\n"); return 2; } break;
+      case 'P': peer = 0; break;
+      case 'R': random_n = atoi(optarg); if (random_n < 1) { fprintf(stderr, "morsegs bench train: --random needs N >= 1\n"); return 2; } break;
+      case 'D': densify = 0; break;
+      case 'w': work = optarg; break;
+      case 'o': out = optarg; break;
+      case 't': threads = atoi(optarg); break;
+      case 'h': usage(stdout); return 0;
+      default: usage(stderr); return 2;
+    }
+  }
+  if (threads > 0) mgs_parallel_set_threads(threads);
+  if (!scenes) scenes = full ? "sphere,genus2,thin" : "sphere";
+  if (!iters) iters = full ? 7000 : 2000;
+  mgs_log_set_level(MGS_LOG_WARN);
+  mgs_error err;
+  mgs_error_clear(&err);
+  if (mgs_mkdir_p(work, &err) || mgs_mkdir_p(out, &err)) return mgs_cli_fail("bench train", &err);
+  static const int evals[] = {100, 250, 500, 1000, 1500, 2000, 3000, 4000, 5000, 6000, 7000, 10000, 15000, 20000, 30000};
+  int n_evals = (int)(sizeof evals / sizeof *evals);
+  int my_evals[32], nm = 0;
+  for (int e = 0; e < n_evals; e++) if (evals[e] < iters) my_evals[nm++] = evals[e];
+  my_evals[nm++] = iters;
+  samples ss = {0};
+  char *list = mgs_strdup(scenes);
+  printf("morsegs bench train: %d iterations at %dx%d, %d threads\n", iters, res, res, mgs_parallel_max_threads());
+  mgs_status st = MGS_OK;
+  for (char *tok = strtok(list, ","); tok && st == MGS_OK; tok = strtok(NULL, ",")) {
+    char dir[PATH_MAX];
+    snprintf(dir, sizeof dir, "%s/%s_%d", work, tok, res);
+    if (make_scene(tok, dir, res) != 0) { st = mgs_error_set(&err, MGS_ERR_ARG, "cannot make the built-in scene '%s'", tok); break; }
+    char cfgname[32];
+    snprintf(cfgname, sizeof cfgname, "%s%s", densify ? "adc" : "fixed", random_n ? "-random" : "");
+    st = run_config(tok, cfgname, dir, iters, random_n, random_n > 0, densify, my_evals, nm, &ss, &err);
+  }
+  if (st == MGS_OK && peer) {
+    /* matched to PEERS.md's OpenSplat rows: 200x200, 2000 Gaussians, SH 3, no densification */
+    char dir[PATH_MAX];
+    snprintf(dir, sizeof dir, "%s/sphere_200", work);
+    static const int pe[] = {300, 1000};
+    if (make_scene("sphere", dir, 200) != 0) st = mgs_error_set(&err, MGS_ERR_ARG, "cannot make the built-in scene 'sphere'");
+    else st = run_config("sphere", "peer-2000", dir, 1000, 2000, 0, 0, pe, 2, &ss, &err);
+  }
+  free(list);
+  if (st) { free(ss.s); return mgs_cli_fail("bench train", &err); }
+  char path[PATH_MAX];
+  snprintf(path, sizeof path, "%s/train.csv", out);
+  FILE *f = fopen(path, "w");
+  if (f) {
+    fprintf(f, "scene,config,iteration,train_seconds,ms_per_iter,cpu_ms_per_iter,gaussians,test_psnr,test_ssim,fwd_ms,loss_ms,bwd_ms,strategy_ms,adam_ms\n");
+    for (size_t i = 0; i < ss.n; i++)
+      fprintf(f, "%s,%s,%d,%.3f,%.3f,%.3f,%zu,%.4f,%.5f,%.3f,%.3f,%.3f,%.3f,%.3f\n", ss.s[i].scene, ss.s[i].config, ss.s[i].iteration,
+              ss.s[i].seconds, ss.s[i].ms_per_iter, ss.s[i].cpu_ms_per_iter, ss.s[i].gaussians, ss.s[i].psnr, ss.s[i].ssim, ss.s[i].phase_ms[0],
+              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4]);
+    fclose(f);
+  }
+  snprintf(path, sizeof path, "%s/train.md", out);
+  f = fopen(path, "w");
+  if (f) {
+    fprintf(f, "| scene | config | iteration | train time (s) | ms/iteration (segment) | CPU ms/iteration (all threads) | fwd / loss / bwd / strategy / Adam ms | Gaussians | test PSNR (dB) | test SSIM |\n");
+    fprintf(f, "|---|---|---|---|---|---|---|---|---|---|\n");
+    for (size_t i = 0; i < ss.n; i++)
+      fprintf(f, "| %s | %s | %d | %.1f | %.2f | %.2f | %.1f / %.1f / %.1f / %.1f / %.1f | %zu | %.2f | %.4f |\n", ss.s[i].scene,
+              ss.s[i].config, ss.s[i].iteration, ss.s[i].seconds, ss.s[i].ms_per_iter, ss.s[i].cpu_ms_per_iter, ss.s[i].phase_ms[0],
+              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].gaussians,
+              ss.s[i].psnr, ss.s[i].ssim);
+    fclose(f);
+  }
+  snprintf(path, sizeof path, "%s/train.png", out);
+  plot(&ss, path);
+  printf("wrote %s/train.csv, %s/train.md, %s/train.png\n", out, out, out);
+  free(ss.s);
+  return 0;
+}

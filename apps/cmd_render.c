@@ -1,4 +1,120 @@
-/* PLACEHOLDER: replaced by the implementation of `morsegs render`. */
+/* morsegs render RUN --split test -o DIR: renders a trained run's views to PNGs, with the
+ * dataset and settings recorded in RUN/cfg_args. */
+#include <dirent.h>
+#include <getopt.h>
+#include <limits.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "apps/mgs_cli.h"
-int mgs_cmd_render(int argc, char **argv) { (void)argc; (void)argv; fprintf(stderr, "morsegs render: not implemented yet\n"); return 1; }
+#include "core/mgs_core.h"
+#include "render/mgs_raster.h"
+#include "train/mgs_train.h"
+
+static void usage(FILE *f) {
+  fprintf(f,
+    "usage: morsegs render RUN -o DIR [options]\n"
+    "  -o, --output DIR       folder for the PNGs (one per view, named after it)\n"
+    "      --split S          train, val, test (default) or all\n"
+    "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
+    "      --force            write into a non-empty DIR\n");
+}
+
+static int dir_nonempty(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  struct dirent *e;
+  int any = 0;
+  while ((e = readdir(d)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) { any = 1; break; }
+  closedir(d);
+  return any;
+}
+
+int mgs_cmd_render(int argc, char **argv) {
+  static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"split", required_argument, 0, 's'},
+                                       {"iteration", required_argument, 0, 'i'}, {"force", no_argument, 0, 'f'},
+                                       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  const char *out = NULL, *split = "test";
+  int iteration = -1, force = 0, c;
+  optind = 1;
+  while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    switch (c) {
+      case 'o': out = optarg; break;
+      case 's': split = optarg; break;
+      case 'i': {
+        char *end;
+        long v = strtol(optarg, &end, 10);
+        if (!*optarg || *end || v < 0 || v > INT_MAX) { fprintf(stderr, "morsegs render: --iteration needs an integer >= 0\n"); return 2; }
+        iteration = (int)v;
+        break;
+      }
+      case 'f': force = 1; break;
+      case 'h': usage(stdout); return 0;
+      default: usage(stderr); return 2;
+    }
+  }
+  if (optind != argc - 1 || !out) {
+    fprintf(stderr, "morsegs render: %s\n", !out ? "-o DIR is required" : "exactly one RUN folder is expected");
+    usage(stderr);
+    return 2;
+  }
+  int first = -1, last = -1;
+  for (int s = 0; s < MGS_SPLIT_COUNT; s++)
+    if (!strcmp(split, mgs_split_name((mgs_split)s))) first = last = s;
+  if (!strcmp(split, "all")) { first = 0; last = MGS_SPLIT_COUNT - 1; }
+  if (first < 0) { fprintf(stderr, "morsegs render: unknown --split '%s' (train, val, test, all)\n", split); return 2; }
+  const char *run = argv[optind];
+  if (mgs_is_dir(out) && dir_nonempty(out) && !force) {
+    fprintf(stderr, "morsegs render: %s: output folder is not empty (use --force to write into it)\n", out);
+    return 1;
+  }
+  mgs_error err;
+  mgs_error_clear(&err);
+  mgs_dataset *ds = NULL;
+  mgs_gaussians *g = NULL;
+  mgs_raster *r = NULL;
+  int it = 0, rc = 1;
+  size_t written = 0;
+  mgs_status st = mgs_run_open(run, iteration, 0, &ds, &g, &it, &err);
+  if (st) goto done;
+  char abs_out[PATH_MAX], abs_ds[PATH_MAX];
+  if ((st = mgs_mkdir_p(out, &err))) goto done;
+  if (realpath(out, abs_out) && realpath(ds->root, abs_ds) && !strncmp(abs_out, abs_ds, strlen(abs_ds)) &&
+      (abs_out[strlen(abs_ds)] == 0 || abs_out[strlen(abs_ds)] == '/')) {
+    st = mgs_error_set(&err, MGS_ERR_ARG, "%s: output folder is inside the dataset %s; choose another -o", out, ds->root);
+    goto done;
+  }
+  r = mgs_raster_create();
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  memcpy(rs.background, ds->background, sizeof rs.background);
+  rs.sh_degree = g->sh_degree;
+  for (int s = first; s <= last; s++)
+    for (size_t i = 0; i < ds->n_views[s]; i++) {
+      mgs_view *v = &ds->views[s][i];
+      mgs_raster_output ro;
+      if ((st = mgs_raster_forward(r, g, &v->cam, &rs, &ro, &err))) goto done;
+      mgs_image *img = mgs_image_create(ro.width, ro.height, 3);
+      if (!img) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+      for (size_t k = 0; k < (size_t)ro.width * ro.height * 3; k++) img->data[k] = mgs_clampf(ro.color[k], 0, 1);
+      char name[512];
+      snprintf(name, sizeof name, "%s%s%s.png", last > first ? mgs_split_name((mgs_split)s) : "", last > first ? "_" : "",
+               v->name ? v->name : "view");
+      for (char *p = name; *p; p++) if (*p == '/') *p = '_';
+      char *path = mgs_path_join(out, name);
+      st = mgs_image_write(path, img, &err);
+      free(path);
+      mgs_image_destroy(img);
+      if (st) goto done;
+      written++;
+    }
+  printf("rendered %zu views of %s (iteration %d, %zu Gaussians) into %s\n", written, run, it, g->n, out);
+  rc = 0;
+done:
+  if (rc) mgs_cli_fail("render", &err);
+  mgs_raster_destroy(r);
+  mgs_gaussians_destroy(g);
+  mgs_dataset_destroy(ds);
+  return rc;
+}

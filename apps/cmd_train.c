@@ -1,4 +1,423 @@
-/* PLACEHOLDER: replaced by the implementation of `morsegs train`. */
+/* morsegs train DATA -o RUN: the 3DGS baseline trainer (reference defaults), writing the
+ * reference run layout. Never writes into the dataset folder; refuses a non-empty RUN
+ * unless --force or --resume; Ctrl-C writes a checkpoint and the current .ply. */
+#include <getopt.h>
+#include <limits.h>
+#include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <dirent.h>
+#include <cjson/cJSON.h>
 #include "apps/mgs_cli.h"
-int mgs_cmd_train(int argc, char **argv) { (void)argc; (void)argv; fprintf(stderr, "morsegs train: not implemented yet\n"); return 1; }
+#include "core/mgs_core.h"
+#include "train/mgs_train.h"
+#include "train/mgs_strategy.h"
+
+static volatile sig_atomic_t g_stop = 0;
+static void on_sigint(int sig) { (void)sig; g_stop = 1; }
+
+static void usage(FILE *f) {
+  fprintf(f,
+    "usage: morsegs train DATA -o RUN [options]\n"
+    "  DATA: NeRF-synthetic (transforms_train.json), nerfstudio (transforms.json) or COLMAP folder\n"
+    "  -o, --output RUN        run folder (point_cloud/iteration_N/point_cloud.ply, cameras.json, cfg_args)\n"
+    "      --iters N           iterations (30000)\n"
+    "      --downscale N       train on images downscaled by N (1)\n"
+    "      --sh-degree N       max SH degree 0..3 (3), raised every 1000 iterations\n"
+    "      --white | --black   background (white)\n"
+    "      --test-every N      COLMAP/nerfstudio: every Nth view is a test view (8)\n"
+    "      --seed S            random seed (0)\n"
+    "      --strategy adc      density control: adc (reference) or none\n"
+    "      --init sfm|random   initial Gaussians: dataset points (falls back to random), or random\n"
+    "      --random-points N   Gaussians of the random init (100000)\n"
+    "      --densify-from N    (500)   --densify-until N (15000)   --densify-every N (100)\n"
+    "      --opacity-reset-every N (3000)   --grad-threshold G (2e-4)\n"
+    "      --checkpoint-every N   periodic checkpoint RUN/checkpoint.mgsckpt (1000; 0 = off)\n"
+    "      --save-at LIST      extra .ply saves at these iterations (7000)\n"
+    "      --resume            continue RUN from its checkpoint\n"
+    "      --force             reuse a non-empty RUN (its previous outputs are removed)\n"
+    "      --threads N         worker threads (all cores)\n"
+    "      --freeze            diagnostic: never update the parameters (test calibration)\n"
+    "      --quiet             no progress bar\n"
+    "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
+    "  --normal-loss, --init levelset|lpvi.\n");
+}
+
+enum {
+  O_ITERS = 1000, O_DOWNSCALE, O_SH, O_WHITE, O_BLACK, O_TEST_EVERY, O_SEED, O_STRATEGY, O_INIT,
+  O_RANDOM_POINTS, O_DFROM, O_DUNTIL, O_DEVERY, O_RESET, O_GTHR, O_CKPT, O_SAVE_AT, O_RESUME, O_FORCE,
+  O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_HELP
+};
+
+static int parse_int(const char *s, const char *name, int lo, int *out) {
+  char *end;
+  long v = strtol(s, &end, 10);
+  if (*s == 0 || *end || v < lo || v > INT_MAX) {
+    fprintf(stderr, "morsegs train: %s needs an integer >= %d (got '%s')\n", name, lo, s);
+    return 0;
+  }
+  *out = (int)v;
+  return 1;
+}
+
+/* Non-empty directory? */
+static int dir_has_entries(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  struct dirent *e;
+  int any = 0;
+  while ((e = readdir(d)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) { any = 1; break; }
+  closedir(d);
+  return any;
+}
+
+/* Is `inner` (existing or about to be created) inside `outer`? Compares real paths of
+ * the deepest existing ancestor. */
+static int path_inside(const char *inner, const char *outer) {
+  char ro[PATH_MAX], ri[PATH_MAX];
+  if (!realpath(outer, ro)) return 0;
+  char *probe = mgs_strdup(inner);
+  if (!probe) return 0;
+  int inside = 0;
+  for (;;) {
+    if (realpath(probe, ri)) {
+      size_t lo = strlen(ro);
+      inside = !strncmp(ri, ro, lo) && (ri[lo] == 0 || ri[lo] == '/');
+      break;
+    }
+    char *slash = strrchr(probe, '/');
+    if (!slash) { inside = realpath(".", ri) && !strncmp(ri, ro, strlen(ro)) && (ri[strlen(ro)] == 0 || ri[strlen(ro)] == '/'); break; }
+    if (slash == probe) { slash[1] = 0; continue; }
+    *slash = 0;
+  }
+  free(probe);
+  return inside;
+}
+
+static mgs_status write_stats(const char *run, const mgs_trainer *t, mgs_error *err) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddNumberToObject(o, "iterations", mgs_trainer_iteration(t));
+  cJSON_AddNumberToObject(o, "train_seconds", mgs_trainer_seconds(t));
+  cJSON_AddNumberToObject(o, "gaussians", (double)mgs_trainer_model(t)->n);
+  cJSON_AddNumberToObject(o, "final_loss", mgs_trainer_last_loss(t));
+  cJSON_AddNumberToObject(o, "peak_rss_mb", (double)mgs_peak_rss() / (1024.0 * 1024.0));
+  char *text = cJSON_Print(o);
+  cJSON_Delete(o);
+  char *path = mgs_path_join(run, "train_stats.json");
+  mgs_status st = text && path ? mgs_write_file_atomic(path, text, strlen(text), err)
+                               : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  free(text); free(path);
+  return st;
+}
+
+/* Removes what an earlier run wrote (with --force), never anything else. */
+static mgs_status clear_run(const char *run, mgs_error *err) {
+  static const char *dirs[] = {"point_cloud", "eval", "renders"};
+  static const char *files[] = {"checkpoint.mgsckpt", "cameras.json", "cfg_args", "results.json", "train_stats.json"};
+  for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++) {
+    char *p = mgs_path_join(run, dirs[i]);
+    mgs_status st = p && mgs_is_dir(p) ? mgs_remove_tree(p, err) : MGS_OK;
+    free(p);
+    if (st) return st;
+  }
+  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+    char *p = mgs_path_join(run, files[i]);
+    if (p) remove(p);
+    free(p);
+  }
+  return MGS_OK;
+}
+
+static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
+                             const char *init, const char *save_at, int downscale, int white, int test_every,
+                             int resume, int force, int threads, int quiet, int random_points,
+                             unsigned long long seed);
+
+int mgs_cmd_train(int argc, char **argv) {
+  static const struct option opts[] = {
+    {"output", required_argument, 0, 'o'}, {"iters", required_argument, 0, O_ITERS},
+    {"downscale", required_argument, 0, O_DOWNSCALE}, {"sh-degree", required_argument, 0, O_SH},
+    {"white", no_argument, 0, O_WHITE}, {"black", no_argument, 0, O_BLACK},
+    {"test-every", required_argument, 0, O_TEST_EVERY}, {"seed", required_argument, 0, O_SEED},
+    {"strategy", required_argument, 0, O_STRATEGY}, {"init", required_argument, 0, O_INIT},
+    {"random-points", required_argument, 0, O_RANDOM_POINTS},
+    {"densify-from", required_argument, 0, O_DFROM}, {"densify-until", required_argument, 0, O_DUNTIL},
+    {"densify-every", required_argument, 0, O_DEVERY}, {"opacity-reset-every", required_argument, 0, O_RESET},
+    {"grad-threshold", required_argument, 0, O_GTHR}, {"checkpoint-every", required_argument, 0, O_CKPT},
+    {"save-at", required_argument, 0, O_SAVE_AT}, {"resume", no_argument, 0, O_RESUME},
+    {"force", no_argument, 0, O_FORCE}, {"threads", required_argument, 0, O_THREADS},
+    {"freeze", no_argument, 0, O_FREEZE}, {"quiet", no_argument, 0, O_QUIET},
+    {"topo-loss", optional_argument, 0, O_TOPO}, {"pers-loss", optional_argument, 0, O_PERS},
+    {"normal-loss", optional_argument, 0, O_NORMAL}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+  mgs_train_options o;
+  mgs_train_options_default(&o);
+  o.checkpoint_every = 1000;
+  const char *run = NULL, *strategy = "adc", *init = "sfm", *save_at = "7000";
+  int downscale = 1, white = 1, test_every = 8, resume = 0, force = 0, threads = 0, quiet = 0, random_points = 100000;
+  unsigned long long seed = 0;
+  int c;
+  unsigned char given[O_HELP + 1] = {0}; /* flags typed on this command line */
+  optind = 1;
+  while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    if (c >= O_ITERS && c <= O_HELP) given[c] = 1;
+    switch (c) {
+      case 'o': run = optarg; break;
+      case O_ITERS: if (!parse_int(optarg, "--iters", 1, &o.iterations)) return 2; break;
+      case O_DOWNSCALE: if (!parse_int(optarg, "--downscale", 1, &downscale)) return 2; break;
+      case O_SH: if (!parse_int(optarg, "--sh-degree", 0, &o.sh_degree) || o.sh_degree > 3) { fprintf(stderr, "morsegs train: --sh-degree must be 0..3\n"); return 2; } break;
+      case O_WHITE: white = 1; break;
+      case O_BLACK: white = 0; break;
+      case O_TEST_EVERY: if (!parse_int(optarg, "--test-every", 1, &test_every)) return 2; break;
+      case O_SEED: {
+        char *end;
+        seed = strtoull(optarg, &end, 10);
+        if (!*optarg || *end) { fprintf(stderr, "morsegs train: --seed needs a non-negative integer (got '%s')\n", optarg); return 2; }
+        break;
+      }
+      case O_STRATEGY: strategy = optarg; break;
+      case O_INIT: init = optarg; break;
+      case O_RANDOM_POINTS: if (!parse_int(optarg, "--random-points", 1, &random_points)) return 2; break;
+      case O_DFROM: if (!parse_int(optarg, "--densify-from", 0, &o.adc.densify_from)) return 2; break;
+      case O_DUNTIL: if (!parse_int(optarg, "--densify-until", 0, &o.adc.densify_until)) return 2; break;
+      case O_DEVERY: if (!parse_int(optarg, "--densify-every", 1, &o.adc.densify_every)) return 2; break;
+      case O_RESET: if (!parse_int(optarg, "--opacity-reset-every", 0, &o.adc.opacity_reset_every)) return 2; break;
+      case O_GTHR: {
+        char *end;
+        double v = strtod(optarg, &end);
+        if (!*optarg || *end || !(v > 0)) { fprintf(stderr, "morsegs train: --grad-threshold needs a positive number (got '%s')\n", optarg); return 2; }
+        o.adc.grad_threshold = (float)v;
+        break;
+      }
+      case O_CKPT: if (!parse_int(optarg, "--checkpoint-every", 0, &o.checkpoint_every)) return 2; break;
+      case O_SAVE_AT: save_at = optarg; break;
+      case O_RESUME: resume = 1; break;
+      case O_FORCE: force = 1; break;
+      case O_THREADS: if (!parse_int(optarg, "--threads", 1, &threads)) return 2; break;
+      case O_FREEZE: o.freeze = 1; break;
+      case O_QUIET: quiet = 1; break;
+      case O_TOPO: fprintf(stderr, "morsegs train: --topo-loss is not available yet (MorseGS persistence loss comes in a later issue)\n"); return 2;
+      case O_PERS: fprintf(stderr, "morsegs train: --pers-loss is not available yet (Topology-GS PersLoss comes in a later issue)\n"); return 2;
+      case O_NORMAL: fprintf(stderr, "morsegs train: --normal-loss is not available yet (comes in a later issue)\n"); return 2;
+      case 'h': case O_HELP: usage(stdout); return 0;
+      default: usage(stderr); return 2;
+    }
+  }
+  if (optind != argc - 1 || !run) {
+    fprintf(stderr, "morsegs train: %s\n", !run ? "-o RUN is required" : "exactly one DATA folder is expected");
+    usage(stderr);
+    return 2;
+  }
+  const char *data = argv[optind];
+  /* --resume: settings not typed again come from the run's record */
+  mgs_settings prev;
+  mgs_settings_init(&prev);
+  if (resume && run) {
+    char *cfg = mgs_path_join(run, "cfg_args");
+    if (cfg && mgs_path_exists(cfg) && mgs_settings_read(cfg, &prev, NULL) == MGS_OK) {
+      const char *v;
+#define RESTORE_INT(flag, key, dst) if (!given[flag] && (v = mgs_settings_get(&prev, key))) dst = atoi(v)
+      RESTORE_INT(O_ITERS, "iterations", o.iterations);
+      RESTORE_INT(O_DOWNSCALE, "downscale", downscale);
+      RESTORE_INT(O_SH, "sh_degree", o.sh_degree);
+      RESTORE_INT(O_TEST_EVERY, "test_every", test_every);
+      RESTORE_INT(O_RANDOM_POINTS, "random_points", random_points);
+      RESTORE_INT(O_DFROM, "densify_from_iter", o.adc.densify_from);
+      RESTORE_INT(O_DUNTIL, "densify_until_iter", o.adc.densify_until);
+      RESTORE_INT(O_DEVERY, "densification_interval", o.adc.densify_every);
+      RESTORE_INT(O_RESET, "opacity_reset_interval", o.adc.opacity_reset_every);
+      RESTORE_INT(O_CKPT, "checkpoint_every", o.checkpoint_every);
+#undef RESTORE_INT
+      if (!given[O_SEED] && (v = mgs_settings_get(&prev, "seed"))) seed = strtoull(v, NULL, 10);
+      if (!given[O_GTHR] && (v = mgs_settings_get(&prev, "densify_grad_threshold"))) o.adc.grad_threshold = (float)atof(v);
+      if (!given[O_WHITE] && !given[O_BLACK] && (v = mgs_settings_get(&prev, "white_background"))) white = !strcmp(v, "True");
+      if (!given[O_STRATEGY] && (v = mgs_settings_get(&prev, "strategy"))) strategy = v;
+      if (!given[O_FREEZE] && (v = mgs_settings_get(&prev, "freeze"))) o.freeze = !strcmp(v, "True");
+      if (!given[O_INIT] && (v = mgs_settings_get(&prev, "init"))) init = v; /* for the record only */
+    }
+    free(cfg);
+  }
+  int rc = mgs_cmd_train_run(data, run, &o, strategy, init, save_at, downscale, white, test_every, resume, force, threads,
+                             quiet, random_points, seed);
+  mgs_settings_free(&prev);
+  return rc;
+}
+
+static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
+                             const char *init, const char *save_at, int downscale, int white, int test_every,
+                             int resume, int force, int threads, int quiet, int random_points,
+                             unsigned long long seed) {
+  mgs_train_options o = *op;
+  if (!strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: --strategy morse is not available yet (comes in a later issue)\n"); return 2; }
+  if (strcmp(strategy, "adc") && strcmp(strategy, "none")) { fprintf(stderr, "morsegs train: unknown --strategy '%s' (adc, none)\n", strategy); return 2; }
+  if (!strcmp(init, "levelset") || !strcmp(init, "lpvi")) { fprintf(stderr, "morsegs train: --init %s is not available yet (comes in a later issue)\n", init); return 2; }
+  if (strcmp(init, "sfm") && strcmp(init, "random")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random)\n", init); return 2; }
+  int saves[64], n_saves = 0;
+  for (const char *p = save_at; *p && n_saves < 64;) {
+    char *end;
+    long v = strtol(p, &end, 10);
+    if (end == p || v < 1) { fprintf(stderr, "morsegs train: --save-at needs a comma-separated list of iterations (got '%s')\n", save_at); return 2; }
+    if (v < o.iterations) saves[n_saves++] = (int)v;
+    p = *end == ',' ? end + 1 : end;
+    if (*end && *end != ',') { fprintf(stderr, "morsegs train: bad --save-at list '%s'\n", save_at); return 2; }
+  }
+  if (threads) mgs_parallel_set_threads(threads);
+  o.seed = seed;
+  o.adc.white_background = white;
+  o.progress = !quiet;
+  o.stop = &g_stop;
+
+  mgs_error err;
+  mgs_error_clear(&err);
+  if (!mgs_is_dir(data)) { fprintf(stderr, "morsegs train: %s: dataset folder not found\n", data); return 1; }
+  if (path_inside(run, data)) {
+    fprintf(stderr, "morsegs train: %s: the run folder is inside the dataset folder %s; choose another -o (the dataset is never written to)\n", run, data);
+    return 2;
+  }
+  if (mgs_is_dir(run) && dir_has_entries(run) && !force && !resume) {
+    fprintf(stderr, "morsegs train: %s: run folder exists and is not empty (use --force to replace it or --resume to continue)\n", run);
+    return 1;
+  }
+  if (mgs_path_exists(run) && !mgs_is_dir(run)) { fprintf(stderr, "morsegs train: %s: exists and is not a folder\n", run); return 1; }
+  char *ckpt = mgs_path_join(run, "checkpoint.mgsckpt");
+  if (resume && !mgs_path_exists(ckpt)) {
+    fprintf(stderr, "morsegs train: %s: no checkpoint to resume from\n", ckpt);
+    free(ckpt);
+    return 1;
+  }
+  o.checkpoint_path = ckpt;
+
+  mgs_dataset_options dopt;
+  mgs_dataset_options_default(&dopt);
+  dopt.downscale = downscale;
+  dopt.white_background = white;
+  dopt.load_images = 1;
+  dopt.test_every = test_every;
+  mgs_dataset *ds = NULL;
+  int rc = 1;
+  mgs_trainer *t = NULL;
+  mgs_status st = mgs_dataset_load(data, &dopt, &ds, &err);
+  if (st) goto done;
+  if (!resume && force && (st = clear_run(run, &err))) goto done;
+  if ((st = mgs_mkdir_p(run, &err))) goto done;
+
+  mgs_gaussians *g0 = NULL;
+  const char *init_used = init;
+  if (resume) {
+    g0 = mgs_gaussians_create(1, o.sh_degree); /* replaced by the checkpoint */
+    size_t first;
+    if (!g0 || (st = mgs_gaussians_append(g0, 1, &first, &err))) { mgs_gaussians_destroy(g0); if (!st) st = MGS_ERR_NOMEM; goto done; }
+  } else if (!strcmp(init, "sfm") && ds->init_points && ds->init_points->n > 0) {
+    st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &g0, &err);
+  } else {
+    /* the reference's random init for NeRF-synthetic: a cube of half-size 1.3; for other
+       formats (scale unknown) a cube of half-size extent/1.1 * 0.5 around the cameras' centre */
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+      double h = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 1.3 : 0.5 * ds->extent / 1.1;
+      double cc = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 0.0 : ds->center[k];
+      lo[k] = cc - h; hi[k] = cc + h;
+    }
+    mgs_rng rng;
+    mgs_rng_init(&rng, seed, 0x696e6974u);
+    init_used = "random";
+    if (!strcmp(init, "sfm")) mgs_info("%s: no initial points; random init with %d Gaussians", data, random_points);
+    st = mgs_init_random((size_t)random_points, lo, hi, o.sh_degree, &rng, &g0, &err);
+  }
+  if (st) goto done;
+  mgs_strategy *strat = NULL;
+  if (!strcmp(strategy, "adc")) strat = mgs_strategy_adc_create(&o.adc);
+  if ((st = mgs_trainer_create(ds, &o, g0, strat, &t, &err))) goto done;
+  if (resume) {
+    if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
+    mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
+  }
+
+  /* settings record and cameras before training (a crash still leaves them) */
+  {
+    char abs_data[PATH_MAX];
+    if (!realpath(data, abs_data)) snprintf(abs_data, sizeof abs_data, "%s", data);
+    mgs_settings s;
+    mgs_settings_init(&s);
+    mgs_settings_seti(&s, "sh_degree", o.sh_degree);
+    mgs_settings_set(&s, "source_path", abs_data, 1);
+    mgs_settings_set(&s, "model_path", run, 1);
+    mgs_settings_set(&s, "images", "images", 1);
+    mgs_settings_seti(&s, "resolution", downscale);
+    mgs_settings_set(&s, "white_background", white ? "True" : "False", 0);
+    mgs_settings_set(&s, "data_device", "cpu", 1);
+    mgs_settings_set(&s, "eval", "True", 0);
+    mgs_settings_seti(&s, "downscale", downscale);
+    mgs_settings_seti(&s, "test_every", test_every);
+    mgs_settings_seti(&s, "iterations", o.iterations);
+    mgs_settings_seti(&s, "seed", (long long)seed);
+    mgs_settings_set(&s, "strategy", strategy, 1);
+    mgs_settings_set(&s, "init", init_used, 1);
+    mgs_settings_seti(&s, "random_points", random_points);
+    mgs_settings_setf(&s, "lambda_dssim", o.lambda_dssim);
+    mgs_settings_setf(&s, "position_lr_init", o.lr_mean_init);
+    mgs_settings_setf(&s, "position_lr_final", o.lr_mean_final);
+    mgs_settings_seti(&s, "position_lr_max_steps", o.iterations);
+    mgs_settings_setf(&s, "feature_lr", o.lr_sh_dc);
+    mgs_settings_setf(&s, "feature_rest_lr", o.lr_sh_rest);
+    mgs_settings_setf(&s, "opacity_lr", o.lr_opacity);
+    mgs_settings_setf(&s, "scaling_lr", o.lr_log_scale);
+    mgs_settings_setf(&s, "rotation_lr", o.lr_rot);
+    mgs_settings_seti(&s, "sh_increase_every", o.sh_every);
+    mgs_settings_seti(&s, "densify_from_iter", o.adc.densify_from);
+    mgs_settings_seti(&s, "densify_until_iter", o.adc.densify_until);
+    mgs_settings_seti(&s, "densification_interval", o.adc.densify_every);
+    mgs_settings_seti(&s, "opacity_reset_interval", o.adc.opacity_reset_every);
+    mgs_settings_setf(&s, "densify_grad_threshold", o.adc.grad_threshold);
+    mgs_settings_setf(&s, "percent_dense", o.adc.percent_dense);
+    mgs_settings_setf(&s, "min_opacity", o.adc.min_opacity);
+    mgs_settings_setf(&s, "max_screen_size", o.adc.max_screen_px);
+    mgs_settings_seti(&s, "checkpoint_every", o.checkpoint_every);
+    mgs_settings_seti(&s, "threads", mgs_parallel_max_threads());
+    mgs_settings_set(&s, "freeze", o.freeze ? "True" : "False", 0);
+    char *cfg = mgs_path_join(run, "cfg_args");
+    st = mgs_settings_write(cfg, &s, &err);
+    free(cfg);
+    mgs_settings_free(&s);
+    if (st) goto done;
+    if ((st = mgs_run_write_cameras(run, ds, &err))) goto done;
+  }
+
+  struct sigaction sa, old;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_sigint;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &old);
+  mgs_info("training %s: %zu train views, %zu Gaussians, %d iterations", data, ds->n_views[MGS_SPLIT_TRAIN],
+           mgs_trainer_model(t)->n, o.iterations);
+  for (int i = 0; i <= n_saves && st == MGS_OK; i++) {
+    int until = i < n_saves ? saves[i] : o.iterations;
+    if (until <= mgs_trainer_iteration(t)) continue;
+    st = mgs_trainer_run_until(t, until, &err);
+    if (st == MGS_OK && i < n_saves) st = mgs_run_write_ply(run, until, mgs_trainer_model(t), &err);
+  }
+  sigaction(SIGINT, &old, NULL);
+  if (st == MGS_ERR_INTERRUPTED) {
+    mgs_error e2;
+    mgs_status s2 = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &e2);
+    fprintf(stderr, "morsegs train: %s; %s\n", err.msg, s2 == MGS_OK ? "current model written" : e2.msg);
+    write_stats(run, t, &e2);
+    rc = 130;
+    goto done;
+  }
+  if (st) goto done;
+  if ((st = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &err))) goto done;
+  if ((st = write_stats(run, t, &err))) goto done;
+  /* a final checkpoint lets --resume extend the run with a larger --iters */
+  if (o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
+  printf("trained %d iterations in %.1f s: %zu Gaussians -> %s/point_cloud/iteration_%d/point_cloud.ply\n",
+         mgs_trainer_iteration(t), mgs_trainer_seconds(t), mgs_trainer_model(t)->n, run, mgs_trainer_iteration(t));
+  rc = 0;
+done:
+  if (rc == 1) mgs_cli_fail("train", &err);
+  mgs_trainer_destroy(t);
+  mgs_dataset_destroy(ds);
+  free(ckpt);
+  return rc;
+}

@@ -1,0 +1,15 @@
+/* Hook of `morsegs eval` for geometry metrics against a ground-truth mesh (Chamfer
+ * distance, F-score, floater count), implemented in apps/eval_geometry.c by the vdb
+ * work. cmd_eval calls it when --mesh GT is given or the dataset has gt_mesh.ply.
+ *   ply_path          the trained 3DGS .ply
+ *   gt_mesh_path      the ground-truth mesh (OBJ/PLY/OFF)
+ *   cjson_object_out  a cJSON* object (passed as void*) to add the metrics to
+ *   table_out         receives readable table rows (NUL-terminated, at most table_len)
+ * Returns 0 on success; non-zero makes eval skip the geometry metrics with a note. */
+#ifndef MGS_EVAL_GEOMETRY_H
+#define MGS_EVAL_GEOMETRY_H
+#include <stddef.h>
+
+int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
+                      size_t table_len);
+#endif

@@ -1,0 +1,185 @@
+/* The training layer (train/): it owns
+ *   Adam over the model's parameter groups ........ mgs_adam_* (train/adam.c)
+ *   count changes that keep Adam in step .......... mgs_model_append / mgs_model_compact
+ *   initial Gaussians (points or random) .......... mgs_init_* (train/init.c)
+ *   the trainer loop, checkpoints, Ctrl-C ......... mgs_trainer_* (train/trainer.c,
+ *                                                   train/checkpoint.c)
+ *   the run folder (cameras.json, cfg_args) ....... mgs_run_* (train/run_io.c)
+ * Density-control strategies plug in through train/mgs_strategy.h.
+ *
+ * Steps are counted as the reference 3DGS does: iteration 1 is the first, learning rates
+ * and the SH degree are updated at the start of an iteration, the optimizer steps after
+ * the strategy's post-backward hook, and the last iteration does no optimizer step. */
+#ifndef MGS_TRAIN_H
+#define MGS_TRAIN_H
+#include <signal.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include "core/mgs_error.h"
+#include "core/mgs_gaussians.h"
+#include "core/mgs_dataset.h"
+#include "core/mgs_rng.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Adam ------------------------------------------------------------------------ */
+
+/* First and second moments with the same groups and shapes as the model; one step count
+ * per group (a group skipped on a step keeps its count, as torch's per-parameter state). */
+typedef struct mgs_adam {
+  size_t n, capacity;
+  float *m[MGS_PARAM_COUNT], *v[MGS_PARAM_COUNT];
+  float lr[MGS_PARAM_COUNT];
+  int64_t t[MGS_PARAM_COUNT];
+  double beta1, beta2, eps;
+  /* SH rest coefficients per channel in use (0..15, default 15): the others never had a
+   * gradient, so their moments are zero and Adam would leave them unchanged; skipping
+   * them is exact and saves most of the memory traffic before the SH degree is 3. */
+  int sh_rest_active;
+} mgs_adam;
+
+/* Moments for n Gaussians, zero; beta = (0.9, 0.999), eps = 1e-15, lr all zero. */
+mgs_adam *mgs_adam_create(size_t n);
+void mgs_adam_destroy(mgs_adam *a);
+/* Adds `count` rows of zero moments at the end. */
+mgs_status mgs_adam_append(mgs_adam *a, size_t count, mgs_error *err);
+/* Keeps rows with keep[i] != 0, in order (the same mask as mgs_gaussians_compact). */
+void mgs_adam_compact(mgs_adam *a, const uint8_t *keep);
+/* Zeroes one group's moments (what the reference does when it replaces a tensor). */
+void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group);
+/* One Adam step on every group whose bit is set in group_mask (1 << group).
+ * grad has the model's n and shapes. Returns MGS_ERR_NUMERIC naming the group and the
+ * Gaussian when a gradient or an updated value is not finite. */
+mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians *grad,
+                         unsigned group_mask, mgs_error *err);
+/* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
+ * step 0 to lr_final at max_steps, constant after. */
+double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);
+
+/* Count changes that keep the optimizer in step: append `count` Gaussians (zero
+ * parameters, identity rotation, zero moments) / keep rows where keep[i] != 0. */
+mgs_status mgs_model_append(mgs_gaussians *g, mgs_adam *a, size_t count, size_t *first,
+                            mgs_error *err);
+size_t mgs_model_compact(mgs_gaussians *g, mgs_adam *a, const uint8_t *keep);
+
+/* ---- initialization ---------------------------------------------------------------- */
+
+/* The reference's create_from_pcd: one Gaussian per point, isotropic scale = sqrt of the
+ * mean squared distance to the 3 nearest neighbours (min 1e-7), opacity 0.1, SH DC from
+ * the colour, higher SH zero, identity rotation. */
+mgs_status mgs_init_from_points(const float *xyz, const float *rgb, size_t n, int sh_degree,
+                                mgs_gaussians **out, mgs_error *err);
+/* Mean squared distance of each point to its 3 nearest other points (uniform grid). */
+mgs_status mgs_knn3_mean_sq(const float *xyz, size_t n, float *out, mgs_error *err);
+/* Random init of the reference for NeRF-synthetic: `count` points uniform in the cube
+ * [lo, hi]^3, colour SH2RGB(u/255), u uniform in [0,1). */
+mgs_status mgs_init_random(size_t count, const double lo[3], const double hi[3], int sh_degree,
+                           mgs_rng *rng, mgs_gaussians **out, mgs_error *err);
+
+/* ---- trainer ----------------------------------------------------------------------- */
+
+typedef struct mgs_adc_options {
+  int densify_from;        /* 500 */
+  int densify_until;       /* 15000 */
+  int densify_every;       /* 100 */
+  int opacity_reset_every; /* 3000 */
+  float grad_threshold;    /* 2e-4, on the mean NDC 2D-mean gradient norm */
+  float percent_dense;     /* 0.01: clone if max scale <= this * extent, else split */
+  int split_n;             /* 2 */
+  float min_opacity;       /* 0.005 */
+  float max_screen_px;     /* 20: pruned after the first opacity reset */
+  float max_world_scale;   /* 0.1 * extent, pruned after the first opacity reset */
+  int white_background;    /* the reference also resets opacity at densify_from then */
+} mgs_adc_options;
+void mgs_adc_options_default(mgs_adc_options *o);
+
+typedef struct mgs_train_options {
+  int iterations;            /* 30000 */
+  int sh_degree;             /* max SH degree, 3 */
+  int sh_every;              /* raise the active degree every N iterations, 1000 */
+  float lambda_dssim;        /* 0.2 */
+  double lr_mean_init, lr_mean_final; /* 1.6e-4, 1.6e-6, times the scene extent */
+  float lr_log_scale, lr_rot, lr_opacity, lr_sh_dc, lr_sh_rest;
+  uint64_t seed;
+  int checkpoint_every;      /* 0 = never (besides Ctrl-C) */
+  const char *checkpoint_path; /* where periodic / interrupt checkpoints go (may be NULL) */
+  volatile sig_atomic_t *stop; /* set asynchronously (SIGINT): stop after this iteration */
+  int freeze;                /* 1: never update parameters (calibration of tests) */
+  int progress;              /* 1: draw the progress bar */
+  mgs_adc_options adc;
+} mgs_train_options;
+void mgs_train_options_default(mgs_train_options *o);
+
+typedef struct mgs_trainer mgs_trainer;
+struct mgs_strategy;
+
+/* Takes ownership of `init` (the initial model) and `strategy` (may be NULL: no density
+ * control). The dataset is borrowed and must have its train images loaded. */
+mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,
+                              struct mgs_strategy *strategy, mgs_trainer **out, mgs_error *err);
+void mgs_trainer_destroy(mgs_trainer *t);
+/* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */
+mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err);
+/* Steps until `iterations`, drawing progress, writing periodic checkpoints, checking the
+ * stop flag (then writes a checkpoint and returns MGS_ERR_INTERRUPTED). */
+mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err);
+/* The same, stopping after iteration `until` (for saves and evaluations on the way). */
+mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err);
+int mgs_trainer_iteration(const mgs_trainer *t);  /* iterations completed */
+int mgs_trainer_active_sh(const mgs_trainer *t);
+const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
+mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
+double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
+double mgs_trainer_last_loss(const mgs_trainer *t);
+/* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam. */
+#define MGS_TRAIN_PHASES 5
+void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
+/* Mean PSNR and SSIM over a split's views (images loaded on demand). */
+mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views,
+                                double *psnr, double *ssim, mgs_error *err);
+
+/* Binary checkpoint (versioned header, checksum, atomic): model, Adam moments and step
+ * counts, strategy state, iteration, active SH degree, RNG and view order. Loading
+ * replaces the trainer's state; it must have been made with the same dataset. */
+mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, mgs_error *err);
+mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_error *err);
+
+/* ---- run folder -------------------------------------------------------------------- */
+
+/* RUN/cameras.json in the reference layout (test then train views: id, img_name, width,
+ * height, position, rotation (camera-to-world), fy, fx). */
+mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs_error *err);
+/* RUN/point_cloud/iteration_N/point_cloud.ply */
+mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
+/* Largest N with RUN/point_cloud/iteration_N/point_cloud.ply, or -1. */
+int mgs_run_latest_iteration(const char *run_dir);
+
+/* Opens a run for render/eval: reads cfg_args (source_path, downscale, background,
+ * test_every), loads the dataset (images only if load_images) and the .ply of
+ * `iteration` (-1: the latest). */
+mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds,
+                        mgs_gaussians **g, int *iteration_out, mgs_error *err);
+
+/* The settings record RUN/cfg_args: Python Namespace(...) syntax as the reference (so
+ * its viewers find source_path), one key=value per setting. */
+typedef struct mgs_settings {
+  size_t n;
+  char **key, **value;
+  int *quoted;
+} mgs_settings;
+void mgs_settings_init(mgs_settings *s);
+void mgs_settings_free(mgs_settings *s);
+void mgs_settings_set(mgs_settings *s, const char *key, const char *value, int quoted);
+void mgs_settings_setf(mgs_settings *s, const char *key, double value);
+void mgs_settings_seti(mgs_settings *s, const char *key, long long value);
+const char *mgs_settings_get(const mgs_settings *s, const char *key);
+mgs_status mgs_settings_write(const char *path, const mgs_settings *s, mgs_error *err);
+mgs_status mgs_settings_read(const char *path, mgs_settings *s, mgs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

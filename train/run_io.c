@@ -1,0 +1,237 @@
+/* The run folder in the reference 3DGS layout: cameras.json, cfg_args and
+ * point_cloud/iteration_N/point_cloud.ply. */
+#include <dirent.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cjson/cJSON.h>
+#include "train/mgs_train.h"
+#include "core/mgs_fs.h"
+#include "core/mgs_ply.h"
+
+mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs_error *err) {
+  cJSON *arr = cJSON_CreateArray();
+  if (!arr) return mgs_error_set(err, MGS_ERR_NOMEM, "cameras.json: out of memory");
+  int id = 0;
+  const mgs_split order[2] = {MGS_SPLIT_TEST, MGS_SPLIT_TRAIN}; /* as the reference */
+  for (int s = 0; s < 2; s++)
+    for (size_t i = 0; i < ds->n_views[order[s]]; i++) {
+      const mgs_view *v = &ds->views[order[s]][i];
+      cJSON *c = cJSON_CreateObject();
+      cJSON_AddNumberToObject(c, "id", id++);
+      cJSON_AddStringToObject(c, "img_name", v->name ? v->name : "");
+      cJSON_AddNumberToObject(c, "width", v->cam.width);
+      cJSON_AddNumberToObject(c, "height", v->cam.height);
+      double pos[3] = {v->cam.c2w[3], v->cam.c2w[7], v->cam.c2w[11]};
+      cJSON_AddItemToObject(c, "position", cJSON_CreateDoubleArray(pos, 3));
+      cJSON *rot = cJSON_CreateArray();
+      for (int r = 0; r < 3; r++) cJSON_AddItemToArray(rot, cJSON_CreateDoubleArray(v->cam.c2w + 4 * r, 3));
+      cJSON_AddItemToObject(c, "rotation", rot);
+      cJSON_AddNumberToObject(c, "fy", v->cam.fy);
+      cJSON_AddNumberToObject(c, "fx", v->cam.fx);
+      cJSON_AddItemToArray(arr, c);
+    }
+  char *text = cJSON_Print(arr);
+  cJSON_Delete(arr);
+  if (!text) return mgs_error_set(err, MGS_ERR_NOMEM, "cameras.json: out of memory");
+  char *path = mgs_path_join(run_dir, "cameras.json");
+  mgs_status st = mgs_write_file_atomic(path, text, strlen(text), err);
+  free(path);
+  free(text);
+  return st;
+}
+
+mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err) {
+  char sub[64];
+  snprintf(sub, sizeof sub, "point_cloud/iteration_%d", iteration);
+  char *dir = mgs_path_join(run_dir, sub);
+  char *path = dir ? mgs_path_join(dir, "point_cloud.ply") : NULL;
+  mgs_status st = path ? mgs_mkdir_p(dir, err) : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  if (st == MGS_OK) st = mgs_ply_write_gaussians(path, g, err);
+  free(dir);
+  free(path);
+  return st;
+}
+
+int mgs_run_latest_iteration(const char *run_dir) {
+  char *pc = mgs_path_join(run_dir, "point_cloud");
+  DIR *d = pc ? opendir(pc) : NULL;
+  int best = -1;
+  if (d) {
+    struct dirent *e;
+    while ((e = readdir(d))) {
+      int it;
+      char tail;
+      if (sscanf(e->d_name, "iteration_%d%c", &it, &tail) != 1 || it < 0) continue;
+      char sub[300];
+      snprintf(sub, sizeof sub, "%s/point_cloud.ply", e->d_name);
+      char *p = mgs_path_join(pc, sub);
+      if (p && mgs_path_exists(p) && it > best) best = it;
+      free(p);
+    }
+    closedir(d);
+  }
+  free(pc);
+  return best;
+}
+
+/* ---- the settings record ------------------------------------------------------------ */
+
+void mgs_settings_init(mgs_settings *s) { memset(s, 0, sizeof *s); }
+
+void mgs_settings_free(mgs_settings *s) {
+  for (size_t i = 0; i < s->n; i++) { free(s->key[i]); free(s->value[i]); }
+  free(s->key); free(s->value); free(s->quoted);
+  memset(s, 0, sizeof *s);
+}
+
+void mgs_settings_set(mgs_settings *s, const char *key, const char *value, int quoted) {
+  for (size_t i = 0; i < s->n; i++)
+    if (!strcmp(s->key[i], key)) {
+      char *v = mgs_strdup(value);
+      if (!v) return;
+      free(s->value[i]);
+      s->value[i] = v;
+      s->quoted[i] = quoted;
+      return;
+    }
+  char **k = realloc(s->key, (s->n + 1) * sizeof(char *));
+  if (k) s->key = k;
+  char **v = realloc(s->value, (s->n + 1) * sizeof(char *));
+  if (v) s->value = v;
+  int *q = realloc(s->quoted, (s->n + 1) * sizeof(int));
+  if (q) s->quoted = q;
+  if (!k || !v || !q) return;
+  s->key[s->n] = mgs_strdup(key);
+  s->value[s->n] = mgs_strdup(value);
+  s->quoted[s->n] = quoted;
+  if (s->key[s->n] && s->value[s->n]) s->n++;
+  else { free(s->key[s->n]); free(s->value[s->n]); }
+}
+
+void mgs_settings_setf(mgs_settings *s, const char *key, double value) {
+  char b[64];
+  snprintf(b, sizeof b, "%.7g", value); /* readable; float settings round-trip */
+  mgs_settings_set(s, key, b, 0);
+}
+
+void mgs_settings_seti(mgs_settings *s, const char *key, long long value) {
+  char b[64];
+  snprintf(b, sizeof b, "%lld", value);
+  mgs_settings_set(s, key, b, 0);
+}
+
+const char *mgs_settings_get(const mgs_settings *s, const char *key) {
+  for (size_t i = 0; i < s->n; i++)
+    if (!strcmp(s->key[i], key)) return s->value[i];
+  return NULL;
+}
+
+mgs_status mgs_settings_write(const char *path, const mgs_settings *s, mgs_error *err) {
+  mgs_atomic_file *af;
+  FILE *f;
+  mgs_status st = mgs_atomic_open(path, &af, &f, err);
+  if (st) return st;
+  fputs("Namespace(", f);
+  for (size_t i = 0; i < s->n; i++) {
+    fprintf(f, "%s%s=", i ? ", " : "", s->key[i]);
+    if (s->quoted[i]) {
+      fputc('\'', f);
+      for (const char *c = s->value[i]; *c; c++) {
+        if (*c == '\'' || *c == '\\') fputc('\\', f);
+        fputc(*c, f);
+      }
+      fputc('\'', f);
+    } else fputs(s->value[i], f);
+  }
+  fputs(")", f);
+  if (ferror(f)) { mgs_atomic_abort(af); return mgs_error_set(err, MGS_ERR_IO, "%s: write failed", path); }
+  return mgs_atomic_commit(af, err);
+}
+
+mgs_status mgs_settings_read(const char *path, mgs_settings *s, mgs_error *err) {
+  char *data = NULL;
+  size_t size = 0;
+  mgs_status st = mgs_read_file(path, &data, &size, err);
+  if (st) return st;
+  mgs_settings_init(s);
+  const char *p = data;
+  while (*p == ' ' || *p == '\n') p++;
+  if (strncmp(p, "Namespace(", 10) != 0) {
+    free(data);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a settings record (expected Namespace(...))", path);
+  }
+  p += 10;
+  char *val = malloc(size + 1), *key = malloc(size + 1);
+  if (!val || !key) { free(val); free(key); free(data); return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); }
+  for (;;) {
+    while (*p == ' ' || *p == ',' || *p == '\n') p++;
+    if (*p == ')' || *p == 0) break;
+    size_t kl = 0;
+    while (*p && *p != '=' && *p != ',' && *p != ')') key[kl++] = *p++;
+    key[kl] = 0;
+    if (*p != '=') { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: setting '%s' has no value", path, key); break; }
+    p++;
+    size_t vl = 0;
+    int quoted = 0;
+    if (*p == '\'' || *p == '"') {
+      char q = *p++;
+      quoted = 1;
+      while (*p && *p != q) {
+        if (*p == '\\' && p[1]) p++;
+        val[vl++] = *p++;
+      }
+      if (*p != q) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: unterminated string for '%s'", path, key); break; }
+      p++;
+    } else {
+      while (*p && *p != ',' && *p != ')') val[vl++] = *p++;
+    }
+    val[vl] = 0;
+    mgs_settings_set(s, key, val, quoted);
+  }
+  free(val); free(key); free(data);
+  if (st) mgs_settings_free(s);
+  return st;
+}
+
+/* ---- opening a finished run ----------------------------------------------------------- */
+
+mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds_out,
+                        mgs_gaussians **g_out, int *iteration_out, mgs_error *err) {
+  *ds_out = NULL; *g_out = NULL;
+  char *cfg = mgs_path_join(run_dir, "cfg_args");
+  mgs_settings s;
+  mgs_status st = mgs_settings_read(cfg, &s, err);
+  free(cfg);
+  if (st) return st;
+  const char *src = mgs_settings_get(&s, "source_path");
+  const char *ds_s = mgs_settings_get(&s, "downscale");
+  const char *wb = mgs_settings_get(&s, "white_background");
+  const char *te = mgs_settings_get(&s, "test_every");
+  if (!src) {
+    mgs_settings_free(&s);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s/cfg_args: no source_path (the dataset of the run)", run_dir);
+  }
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  o.downscale = ds_s ? atoi(ds_s) : 1;
+  if (o.downscale < 1) o.downscale = 1;
+  if (wb) o.white_background = !strcmp(wb, "True");
+  if (te && atoi(te) > 0) o.test_every = atoi(te);
+  o.load_images = load_images;
+  int it = iteration >= 0 ? iteration : mgs_run_latest_iteration(run_dir);
+  if (it < 0) {
+    mgs_settings_free(&s);
+    return mgs_error_set(err, MGS_ERR_IO, "%s: no point_cloud/iteration_N/point_cloud.ply in the run", run_dir);
+  }
+  char sub[96];
+  snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", it);
+  char *ply = mgs_path_join(run_dir, sub);
+  st = mgs_ply_read_gaussians(ply, g_out, err);
+  free(ply);
+  if (st == MGS_OK) st = mgs_dataset_load(src, &o, ds_out, err);
+  mgs_settings_free(&s);
+  if (st) { mgs_gaussians_destroy(*g_out); *g_out = NULL; return st; }
+  if (iteration_out) *iteration_out = it;
+  return MGS_OK;
+}

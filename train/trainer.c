@@ -1,0 +1,285 @@
+/* The training loop of the reference 3DGS (train.py) on the CPU: views in a random order
+ * per epoch, forward, (1-lambda) L1 + lambda (1 - SSIM), backward, the strategy's hooks,
+ * Adam; the SH degree is raised every `sh_every` iterations. Any non-finite loss,
+ * gradient or parameter stops training with a message naming the parameter group. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "train/trainer_internal.h"
+#include "render/mgs_loss.h"
+#include "core/mgs_log.h"
+
+void mgs_train_options_default(mgs_train_options *o) {
+  memset(o, 0, sizeof *o);
+  o->iterations = 30000;
+  o->sh_degree = 3;
+  o->sh_every = 1000;
+  o->lambda_dssim = 0.2f;
+  o->lr_mean_init = 1.6e-4;
+  o->lr_mean_final = 1.6e-6;
+  o->lr_log_scale = 5e-3f;
+  o->lr_rot = 1e-3f;
+  o->lr_opacity = 0.05f;
+  o->lr_sh_dc = 2.5e-3f;
+  o->lr_sh_rest = 2.5e-3f / 20.0f;
+  o->seed = 0;
+  o->checkpoint_every = 0;
+  o->progress = 0;
+  mgs_adc_options_default(&o->adc);
+}
+
+static mgs_status grow_floats(float **p, size_t *cap, size_t need, mgs_error *err) {
+  if (need <= *cap) return MGS_OK;
+  float *q = realloc(*p, need * sizeof(float));
+  if (!q) return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory (%zu floats)", need);
+  *p = q; *cap = need;
+  return MGS_OK;
+}
+
+static void shuffle(mgs_trainer *t) {
+  for (size_t i = 0; i < t->perm_len; i++) t->perm[i] = (uint32_t)i;
+  for (size_t i = t->perm_len; i > 1; i--) {
+    uint32_t j = mgs_rng_below(&t->rng, (uint32_t)i);
+    uint32_t x = t->perm[i - 1]; t->perm[i - 1] = t->perm[j]; t->perm[j] = x;
+  }
+  t->perm_pos = 0;
+}
+
+mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,
+                              mgs_strategy *strategy, mgs_trainer **out, mgs_error *err) {
+  *out = NULL;
+  mgs_trainer *t = calloc(1, sizeof *t);
+  if (!t) { mgs_gaussians_destroy(init); mgs_strategy_destroy(strategy); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
+  t->o = *o;
+  t->ds = ds;
+  t->g = init;
+  t->strategy = strategy;
+  mgs_status st = MGS_OK;
+  if (!init || init->n == 0) st = mgs_error_set(err, MGS_ERR_ARG, "trainer: the initial model is empty");
+  else if (ds->n_views[MGS_SPLIT_TRAIN] == 0) st = mgs_error_set(err, MGS_ERR_ARG, "%s: the dataset has no training views", ds->root);
+  else if (o->iterations < 1) st = mgs_error_set(err, MGS_ERR_ARG, "trainer: iterations must be >= 1 (got %d)", o->iterations);
+  else if (o->sh_degree < 0 || o->sh_degree > 3 || o->sh_degree > init->sh_degree)
+    st = mgs_error_set(err, MGS_ERR_ARG, "trainer: SH degree %d not in 0..%d", o->sh_degree, init->sh_degree);
+  if (st == MGS_OK) st = mgs_gaussians_check_finite(init, err);
+  if (st != MGS_OK) { mgs_trainer_destroy(t); return st; }
+  t->grad = mgs_gaussians_create(init->n, init->sh_degree);
+  t->adam = mgs_adam_create(init->n);
+  t->raster = mgs_raster_create();
+  t->perm_len = ds->n_views[MGS_SPLIT_TRAIN];
+  t->perm = malloc(t->perm_len * sizeof(uint32_t));
+  if (!t->grad || !t->adam || !t->raster || !t->perm) {
+    mgs_trainer_destroy(t);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
+  }
+  double ext = ds->extent > 0 ? ds->extent : 1.0;
+  t->adam->lr[MGS_PARAM_MEAN] = (float)(o->lr_mean_init * ext);
+  t->adam->lr[MGS_PARAM_LOG_SCALE] = o->lr_log_scale;
+  t->adam->lr[MGS_PARAM_ROT] = o->lr_rot;
+  t->adam->lr[MGS_PARAM_OPACITY] = o->lr_opacity;
+  t->adam->lr[MGS_PARAM_SH_DC] = o->lr_sh_dc;
+  t->adam->lr[MGS_PARAM_SH_REST] = o->lr_sh_rest;
+  mgs_raster_settings_default(&t->rs);
+  memcpy(t->rs.background, ds->background, sizeof t->rs.background);
+  mgs_rng_init(&t->rng, o->seed, 0x7261696eu);
+  shuffle(t);
+  for (size_t i = 0; i < t->perm_len && st == MGS_OK; i++) {
+    mgs_view *v = &ds->views[MGS_SPLIT_TRAIN][i];
+    if (!v->image) st = mgs_dataset_load_image(ds, v, err);
+    if (st == MGS_OK && (v->image->channels != 3 || v->image->width != v->cam.width || v->image->height != v->cam.height))
+      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: image is %dx%dx%d, camera expects %dx%d RGB", v->image_path,
+                         v->image->width, v->image->height, v->image->channels, v->cam.width, v->cam.height);
+  }
+  if (st != MGS_OK) { mgs_trainer_destroy(t); return st; }
+  *out = t;
+  return MGS_OK;
+}
+
+void mgs_trainer_destroy(mgs_trainer *t) {
+  if (!t) return;
+  mgs_gaussians_destroy(t->g);
+  mgs_gaussians_destroy(t->grad);
+  mgs_adam_destroy(t->adam);
+  mgs_strategy_destroy(t->strategy);
+  mgs_raster_destroy(t->raster);
+  mgs_progress_destroy(t->progress);
+  free(t->perm); free(t->dl); free(t->gm2d);
+  free(t);
+}
+
+int mgs_trainer_iteration(const mgs_trainer *t) { return t->iteration; }
+int mgs_trainer_active_sh(const mgs_trainer *t) { return t->active_sh; }
+const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
+mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
+double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
+double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
+void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]) {
+  memcpy(out, t->phase_s, sizeof t->phase_s);
+}
+
+/* A gradient model with the model's count, zeroed. */
+static mgs_status zero_grad(mgs_trainer *t, mgs_error *err) {
+  size_t n = t->g->n;
+  if (t->grad->capacity < n) {
+    mgs_status st = mgs_gaussians_reserve(t->grad, n, err);
+    if (st) return st;
+  }
+  t->grad->n = n;
+  for (int k = 0; k < MGS_PARAM_SH_REST; k++)
+    memset(mgs_gaussians_group(t->grad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
+  /* SH rest: only the coefficients of the active degree are read (by Adam) */
+  size_t used = 3 * (size_t)t->adam->sh_rest_active;
+  if (used == MGS_SH_REST_MAX) memset(t->grad->sh_rest, 0, n * MGS_SH_REST_MAX * sizeof(float));
+  else if (used)
+    for (size_t i = 0; i < n; i++) memset(t->grad->sh_rest + i * MGS_SH_REST_MAX, 0, used * sizeof(float));
+  mgs_status st = grow_floats(&t->gm2d, &t->gm_cap, n ? n : 1, err);
+  if (st) return st;
+  memset(t->gm2d, 0, n * sizeof(float));
+  return MGS_OK;
+}
+
+/* Names the parameter group holding a non-finite value, else describes `what`. */
+static mgs_status numeric_stop(mgs_trainer *t, int it, const char *what, mgs_error *err) {
+  mgs_error e2;
+  mgs_error_clear(&e2);
+  if (mgs_gaussians_check_finite(t->g, &e2) != MGS_OK)
+    return mgs_error_set(err, MGS_ERR_NUMERIC, "training stopped at iteration %d: %s (%s)", it, what, e2.msg);
+  return mgs_error_set(err, MGS_ERR_NUMERIC, "training stopped at iteration %d: %s", it, what);
+}
+
+mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
+  const mgs_train_options *o = &t->o;
+  int it = t->iteration + 1;
+  double t0 = mgs_now();
+  double ext = t->ds->extent > 0 ? t->ds->extent : 1.0;
+  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, o->iterations);
+  if (o->sh_every > 0 && it % o->sh_every == 0 && t->active_sh < o->sh_degree) t->active_sh++;
+  t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
+
+  if (t->perm_pos >= t->perm_len) shuffle(t);
+  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][t->perm[t->perm_pos++]];
+  t->rs.sh_degree = t->active_sh;
+  mgs_raster_output ro;
+  mgs_status st = mgs_raster_forward(t->raster, t->g, &v->cam, &t->rs, &ro, err);
+  if (st) return st;
+  double t1 = mgs_now();
+  t->phase_s[0] += t1 - t0;
+  size_t np = (size_t)ro.width * (size_t)ro.height * 3;
+  if ((st = grow_floats(&t->dl, &t->dl_cap, np, err))) return st;
+  memset(t->dl, 0, np * sizeof(float));
+  const float lam = o->lambda_dssim;
+  const float *gt = v->image->data;
+  double l1 = mgs_loss_l1(ro.color, gt, ro.width, ro.height, 3, 1.0f - lam, t->dl);
+  double ssim = mgs_ssim(ro.color, gt, ro.width, ro.height, 3, -lam, t->dl);
+  double loss = (1.0 - lam) * l1 + lam * (1.0 - ssim);
+  t->last_loss = loss;
+  if (!isfinite(loss)) return numeric_stop(t, it, "the loss is not finite", err);
+  double psnr = mgs_psnr(ro.color, gt, ro.width, ro.height, 3);
+  t->ema_loss = it == 1 ? loss : 0.4 * loss + 0.6 * t->ema_loss;
+  t->ema_psnr = it == 1 ? psnr : 0.4 * psnr + 0.6 * t->ema_psnr;
+
+  if ((st = zero_grad(t, err))) return st;
+  double t2 = mgs_now();
+  t->phase_s[1] += t2 - t1;
+  mgs_strategy_step ss;
+  memset(&ss, 0, sizeof ss);
+  ss.iteration = it; ss.model = t->g; ss.adam = t->adam; ss.grad = t->grad;
+  ss.grad_mean2d = t->gm2d; ss.radii = ro.radii; ss.width = ro.width; ss.height = ro.height;
+  ss.extent = ext; ss.rng = &t->rng;
+  int use_strategy = t->strategy && !o->freeze;
+  if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
+    return st;
+  if ((st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err))) return st;
+  double t3 = mgs_now();
+  t->phase_s[2] += t3 - t2;
+  if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
+    return st;
+  /* the reference does no optimizer step on the last iteration, and none on tensors the
+     strategy replaced in this one */
+  double t4 = mgs_now();
+  t->phase_s[3] += t4 - t3;
+  unsigned mask = ((1u << MGS_PARAM_COUNT) - 1) & ~ss.replaced_groups;
+  if (it < o->iterations && !o->freeze && mask && t->g->n == t->grad->n) {
+    st = mgs_adam_step(t->adam, t->g, t->grad, mask, err);
+    if (st == MGS_ERR_NUMERIC) {
+      char msg[MGS_ERROR_MSG_MAX];
+      snprintf(msg, sizeof msg, "%s", err ? err->msg : "non-finite value");
+      return mgs_error_set(err, MGS_ERR_NUMERIC, "training stopped at iteration %d: %s", it, msg);
+    }
+    if (st) return st;
+  }
+  t->iteration = it;
+  double t5 = mgs_now();
+  t->phase_s[4] += t5 - t4;
+  t->seconds += t5 - t0;
+  return MGS_OK;
+}
+
+mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err) {
+  return mgs_trainer_run_until(t, t->o.iterations, err);
+}
+
+mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err) {
+  const mgs_train_options *o = &t->o;
+  if (until > o->iterations) until = o->iterations;
+  if (o->progress && !t->progress) t->progress = mgs_progress_create("train", (size_t)o->iterations);
+  mgs_progress *pb = t->progress;
+  mgs_status st = MGS_OK;
+  while (t->iteration < until) {
+    if (o->stop && *o->stop) {
+      st = MGS_ERR_INTERRUPTED;
+      break;
+    }
+    if ((st = mgs_trainer_step(t, err))) break;
+    if (o->checkpoint_every > 0 && o->checkpoint_path && t->iteration % o->checkpoint_every == 0 &&
+        t->iteration < o->iterations && (st = mgs_trainer_save_checkpoint(t, o->checkpoint_path, err)))
+      break;
+    if (pb && (t->iteration % 10 == 0 || t->iteration == o->iterations)) {
+      char status[128];
+      snprintf(status, sizeof status, "loss %.4f  psnr %.2f  n %zu  sh %d", t->ema_loss, t->ema_psnr, t->g->n, t->active_sh);
+      mgs_progress_update(pb, (size_t)t->iteration, status);
+    }
+  }
+  if (pb && (st != MGS_OK || t->iteration >= o->iterations)) {
+    mgs_progress_destroy(pb);
+    t->progress = NULL;
+  }
+  if (st == MGS_ERR_INTERRUPTED) {
+    if (o->checkpoint_path) {
+      mgs_status s2 = mgs_trainer_save_checkpoint(t, o->checkpoint_path, err);
+      if (s2) return s2;
+    }
+    return mgs_error_set(err, MGS_ERR_INTERRUPTED, "interrupted at iteration %d%s%s", t->iteration,
+                         o->checkpoint_path ? "; checkpoint written to " : "", o->checkpoint_path ? o->checkpoint_path : "");
+  }
+  return st;
+}
+
+
+mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views, double *psnr,
+                                double *ssim, mgs_error *err) {
+  size_t nv = t->ds->n_views[split];
+  *psnr = *ssim = 0;
+  if (nv == 0) return mgs_error_set(err, MGS_ERR_ARG, "%s: no %s views to evaluate", t->ds->root, mgs_split_name(split));
+  size_t use = max_views && max_views < nv ? max_views : nv;
+  float *clamped = NULL;
+  size_t cap = 0;
+  double sp = 0, ss = 0;
+  mgs_raster_settings rs = t->rs;
+  rs.sh_degree = t->active_sh;
+  for (size_t k = 0; k < use; k++) {
+    mgs_view *v = &t->ds->views[split][k * nv / use];
+    mgs_status st = v->image ? MGS_OK : mgs_dataset_load_image(t->ds, v, err);
+    mgs_raster_output ro;
+    if (st == MGS_OK) st = mgs_raster_forward(t->raster, t->g, &v->cam, &rs, &ro, err);
+    size_t np = st == MGS_OK ? (size_t)ro.width * ro.height * 3 : 0;
+    if (st == MGS_OK) st = grow_floats(&clamped, &cap, np, err);
+    if (st != MGS_OK) { free(clamped); return st; }
+    for (size_t i = 0; i < np; i++) clamped[i] = ro.color[i] < 0 ? 0 : (ro.color[i] > 1 ? 1 : ro.color[i]);
+    sp += mgs_psnr(clamped, v->image->data, ro.width, ro.height, 3);
+    ss += mgs_ssim(clamped, v->image->data, ro.width, ro.height, 3, 0, NULL);
+  }
+  free(clamped);
+  *psnr = sp / (double)use;
+  *ssim = ss / (double)use;
+  return MGS_OK;
+}

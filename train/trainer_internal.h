@@ -1,0 +1,32 @@
+/* The trainer's state, shared by trainer.c and checkpoint.c only. */
+#ifndef MGS_TRAINER_INTERNAL_H
+#define MGS_TRAINER_INTERNAL_H
+#include "train/mgs_train.h"
+#include "train/mgs_strategy.h"
+#include "render/mgs_raster.h"
+#include "core/mgs_log.h"
+
+struct mgs_trainer {
+  mgs_train_options o;
+  mgs_dataset *ds;              /* borrowed */
+  mgs_gaussians *g, *grad;
+  mgs_adam *adam;
+  mgs_strategy *strategy;       /* owned, may be NULL */
+  mgs_raster *raster;
+  mgs_raster_settings rs;
+  int iteration;                /* completed */
+  int active_sh;
+  mgs_rng rng;
+  uint32_t *perm;               /* order of the train views in this epoch */
+  size_t perm_len, perm_pos;
+  float *dl;                    /* dL/dcolor */
+  size_t dl_cap;
+  float *gm2d;                  /* per-Gaussian NDC 2D-mean gradient norm */
+  size_t gm_cap;
+  double seconds;               /* training wall time */
+  double ema_loss, ema_psnr;    /* the reference's 0.4/0.6 moving average */
+  double last_loss;
+  double phase_s[MGS_TRAIN_PHASES]; /* seconds per phase, see mgs_trainer_phase_seconds */
+  struct mgs_progress *progress; /* drawn across run_until calls */
+};
+#endif

@@ -10,6 +10,7 @@ static const bench benches[] = {
   {"raster", mgs_bench_raster, "rasterizer forward/backward ms and fraction of peak FLOP/s"},
   {"train", mgs_bench_train, "test PSNR against wall time for the built-in scenes"},
   {"vdb", mgs_bench_vdb, "alpha-field + SDF build time and memory vs OpenVDB ParticlesToLevelSet"},
+  {"diagram", mgs_bench_diagram, "bottleneck/Wasserstein distances vs GUDHI"},
   {"topo", mgs_bench_topo, "narrow-band persistence time and memory vs dense peers"},
 };
 

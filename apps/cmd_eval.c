@@ -16,9 +16,6 @@
 #include "render/mgs_raster.h"
 #include "train/mgs_train.h"
 
-/* Weak so that eval links before apps/eval_geometry.c exists; then it is skipped. */
-#pragma weak mgs_eval_geometry
-
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs eval RUN [options]\n"
@@ -167,14 +164,14 @@ int mgs_cmd_eval(int argc, char **argv) {
     snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", it);
     char *ply = mgs_path_join(run, sub);
     cJSON *geo = cJSON_CreateObject();
-    int grc = mgs_eval_geometry ? mgs_eval_geometry(ply, gt_mesh, geo, table, sizeof table) : -1;
+    int grc = mgs_eval_geometry(ply, gt_mesh, geo, table, sizeof table);
     free(ply);
     if (grc == 0) cJSON_AddItemToObject(res, "geometry", geo);
     else {
       cJSON_Delete(geo);
       table[0] = 0;
-      fprintf(stderr, "morsegs eval: note: geometry metrics against %s skipped (%s)\n", gt_mesh,
-              mgs_eval_geometry ? "the geometry evaluation failed" : "not built into this binary yet");
+      fprintf(stderr, "morsegs eval: note: geometry metrics against %s skipped (the geometry evaluation failed)\n",
+              gt_mesh);
     }
   }
   char key[64];

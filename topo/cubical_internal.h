@@ -1,0 +1,135 @@
+/* Internal to the persistence engine (topo/ *.c): the clamped field accessor, cell keys in
+ * the doubled grid, the reduced cell list and the pairing stages. Not a public header. */
+#ifndef MGS_CUBICAL_INTERNAL_H
+#define MGS_CUBICAL_INTERNAL_H
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mgs_error.h"
+#include "topo/mgs_persistence.h"
+
+/* Cells live in the doubled grid: coordinate a is even for a vertex position and odd for an
+ * edge extent along that axis. V: voxel x <-> a = 2x. T: voxel x <-> a = 2x + 1.
+ * Key = x-major packing of the three doubled coordinates (21 bits each, offset 2^20), so
+ * comparing keys compares (a, b, c) lexicographically. */
+#define CUB_OFF (1 << 20)
+#define CUB_KEY_NONE UINT64_MAX
+static inline uint64_t cub_key(int32_t a, int32_t b, int32_t c) {
+  return ((uint64_t)(uint32_t)(a + CUB_OFF) << 42) | ((uint64_t)(uint32_t)(b + CUB_OFF) << 21) |
+         (uint64_t)(uint32_t)(c + CUB_OFF);
+}
+static inline void cub_unkey(uint64_t k, int32_t *a, int32_t *b, int32_t *c) {
+  *a = (int32_t)((k >> 42) & 0x1fffff) - CUB_OFF;
+  *b = (int32_t)((k >> 21) & 0x1fffff) - CUB_OFF;
+  *c = (int32_t)(k & 0x1fffff) - CUB_OFF;
+}
+static inline int cub_dim(int32_t a, int32_t b, int32_t c) { return (a & 1) + (b & 1) + (c & 1); }
+static inline int cub_key_dim(uint64_t k) {
+  int32_t a, b, c;
+  cub_unkey(k, &a, &b, &c);
+  return cub_dim(a, b, c);
+}
+
+/* The clamped field seen by the engine: voxel(x,y,z) returns the clamped (and, for
+ * superlevel filtrations, negated) value, or +INFINITY where there is no voxel. */
+typedef struct cub_field {
+  float (*voxel)(const void *ctx, int32_t x, int32_t y, int32_t z);
+  const void *ctx;
+  float lo;   /* bottom clamp: cells of exactly this value are collapsed along x */
+  float top;  /* cells with value >= top are not built (they enter last, all at once) */
+  int construction; /* MGS_TOPO_V / MGS_TOPO_T */
+} cub_field;
+
+/* A cell's filtration value (V: max of vertices; T: min of adjacent voxels). */
+float cub_cell_value(const cub_field *f, int32_t a, int32_t b, int32_t c);
+/* Whether cell (a,b,c) of value v belongs to the reduced complex. */
+static inline int cub_keep(const cub_field *f, float v, int32_t a, int32_t b, int32_t c) {
+  if (!(v < f->top)) return 0;
+  if (v > f->lo) return 1;
+  /* v == lo: keep only the left end of each x-run of lo cells (even a, left coface not lo) */
+  return !(a & 1) && cub_cell_value(f, a - 1, b, c) != f->lo;
+}
+/* The voxel whose value sets the cell's value (V: max (value, index) vertex; T: min adjacent). */
+void cub_cell_voxel(const cub_field *f, int32_t a, int32_t b, int32_t c, int32_t vox[3]);
+
+/* Growable array of (key, value) cells: 12 bytes a cell (the dimension is in the key). */
+typedef struct __attribute__((packed, aligned(4))) cub_cell { uint64_t key; float v; } cub_cell;
+typedef struct cub_cells { cub_cell *c; size_t n, cap; } cub_cells;
+mgs_status cub_cells_push(cub_cells *l, uint64_t key, float v, mgs_error *err);
+void cub_cells_free(cub_cells *l);
+
+/* Open-addressing map key -> rank (key and value side by side: one cache line per probe). */
+typedef struct cub_slot { uint64_t key; uint32_t val; uint32_t pad; } cub_slot;
+typedef struct cub_map { cub_slot *slots; size_t mask; } cub_map;
+mgs_status cub_map_init(cub_map *m, size_t n, mgs_error *err);
+void cub_map_free(cub_map *m);
+void cub_map_put(cub_map *m, uint64_t key, uint32_t val);
+static inline uint64_t cub_hash(uint64_t k) {
+  k ^= k >> 33; k *= 0xff51afd7ed558ccdULL; k ^= k >> 33; k *= 0xc4ceb9fe1a85ec53ULL; k ^= k >> 33;
+  return k;
+}
+static inline uint32_t cub_map_get(const cub_map *m, uint64_t key) {
+  size_t i = cub_hash(key) & m->mask;
+  for (;;) {
+    if (m->slots[i].key == key) return m->slots[i].val;
+    if (m->slots[i].key == CUB_KEY_NONE) return UINT32_MAX;
+    i = (i + 1) & m->mask;
+  }
+}
+
+/* The reduced complex sorted by (value, dim, key), with its boundary oracle. The key ->
+ * rank index stores ranks only (4 bytes a slot) and checks keys against the sorted cells. */
+typedef struct cub_complex {
+  const cub_field *f;
+  cub_cell *cells;   /* sorted; rank = index */
+  size_t n;
+  uint32_t *slot;    /* open addressing, UINT32_MAX = empty */
+  size_t mask;
+  size_t n_dim[4];
+} cub_complex;
+
+static inline uint32_t cub_rank_get(const cub_complex *cx, uint64_t key) {
+  size_t i = cub_hash(key) & cx->mask;
+  for (;;) {
+    uint32_t r = cx->slot[i];
+    if (r == UINT32_MAX || cx->cells[r].key == key) return r;
+    i = (i + 1) & cx->mask;
+  }
+}
+
+/* Boundary of cell `rank` in the reduced (Morse) complex, as ascending ranks with Z/2
+ * cancellation; returns the count (<= 6) or -1 with err set (inconsistent band). */
+int cub_boundary(const cub_complex *cx, uint32_t rank, uint32_t out[6], mgs_error *err);
+
+/* Pair records: dim, birth rank, death rank (UINT32_MAX for essential). */
+typedef struct cub_pair { uint32_t dim, birth, death; } cub_pair;
+typedef struct cub_pairs { cub_pair *p; size_t n, cap; } cub_pairs;
+mgs_status cub_pairs_push(cub_pairs *l, uint32_t dim, uint32_t b, uint32_t d, mgs_error *err);
+
+/* Stage flags per rank. */
+enum { CUB_NEG = 1, CUB_CLEARED = 2, CUB_PAIRED_ROW = 4 };
+
+/* Dimension 0: union-find over vertices and edges in rank order. Marks negative edges. */
+mgs_status cub_pairs_d0(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);
+/* Dimension 2: reduction of the 3-cell columns (twist). Marks cleared 2-cells. */
+mgs_status cub_pairs_d2(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);
+/* Dimension 1: reduction of the 2-cell columns with clearing (D2 births skipped) and
+ * compression (negative edges dropped), then essentials of every dimension. */
+mgs_status cub_pairs_d1(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);
+
+/* Runs the whole pipeline on an unsorted cell list (consumed) and fills the diagram. */
+typedef struct cub_run {
+  const cub_field *f;
+  const mgs_topo_opts *opts;
+  double voxel_size, origin[3];
+  int negate_output; /* unused: values are reported in filtration units */
+} cub_run;
+mgs_status cub_persistence(const cub_run *run, cub_cells *cells, mgs_diagram **out,
+                           mgs_topo_stats *stats, mgs_error *err);
+
+mgs_status mgs_topo_check_opts(const mgs_topo_opts *o, mgs_error *err);
+/* The sparse path with the band's own half-width w_limit (VDB background; INFINITY: none). */
+mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs_topo_opts *opts,
+                                             double w_limit, mgs_diagram **out,
+                                             mgs_topo_stats *stats, mgs_error *err);
+#endif

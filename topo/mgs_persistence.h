@@ -1,0 +1,130 @@
+/* The persistence engine: persistence diagrams (dimensions 0, 1, 2, Z/2) of a scalar field
+ * on a 3D cubical complex, dense or over a sparse narrow band (VDB leaves + constant tiles).
+ * This header owns the options, the entry points and the sparse block input; the output
+ * type is mgs_diagram (topo/mgs_diagram.h).
+ *
+ * Filtration. Values are (optionally negated for superlevel sets, then) clamped to
+ * [-w, w]. Construction V (default): voxels are vertices, a cell's value is the max of its
+ * vertices (lower star, Robins-Wood-Sheppard; as PHAT on the explicit V complex,
+ * CubicalRipser V). Construction T: voxels are 3-cells, a cell's value is the min of its
+ * cofaces (GUDHI's CubicalComplex(top_dimensional_cells), CubicalRipser T). Ties are
+ * ordered by (value, dimension, cell index), cell index x-major over the doubled grid.
+ *
+ * Result = the diagram of the clamped field on the dense box that holds it: every pair of
+ * positive persistence (> min_persistence), plus the essential classes (one H0 class for a
+ * box). Two reductions keep the cost with the band, both exact (see topo/persistence.c):
+ *   - cells at the top value (+w, the background) are never built: a class still alive
+ *     below +w dies at +w in the box; it is reported with death = +w and truncated = 1;
+ *   - cells at the bottom value (-w, interior tiles) are collapsed by an x-directed
+ *     acyclic matching in closed form: only the left ends of x-runs of -w cells are kept.
+ * Pairs whose death is +w or whose birth is -w were set by the clamp: truncated = 1.
+ * Pairing: union-find for dimension 0, twist reduction of the 3-cell columns for
+ * dimension 2, reduction with clearing + compression for dimension 1 (topo/pairs_*.c).
+ * Cost: about 8 cells per band voxel, each sorted, indexed and reduced (no discrete
+ * gradient yet; see bench/RESULTS-topo.md). Memory about 300 bytes per leaf voxel.
+ * Coordinates: |voxel index| < 2^19; at most 2^31 cells.
+ *
+ * Dense layout: values[(x*ny + y)*nz + z] (same as the VDB leaf order (x<<6)|(y<<3)|z),
+ * voxel (x,y,z) at world origin + voxel_size * (x,y,z). */
+#ifndef MGS_PERSISTENCE_H
+#define MGS_PERSISTENCE_H
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mgs_error.h"
+#include "topo/mgs_diagram.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_vdb_grid mgs_vdb_grid;
+
+typedef enum mgs_topo_construction {
+  MGS_TOPO_V = 0, /* voxels = vertices, lower star (default) */
+  MGS_TOPO_T = 1  /* voxels = 3-cells, a cell's value = min of its cofaces */
+} mgs_topo_construction;
+
+typedef enum mgs_topo_filtration {
+  MGS_TOPO_SUBLEVEL = 0,  /* SDF: sublevel sets {f <= t} */
+  MGS_TOPO_SUPERLEVEL = 1 /* fog density: superlevel sets {f >= t}, computed as sublevel of -f;
+                             births/deaths are reported in -f units (birth <= death) */
+} mgs_topo_filtration;
+
+typedef struct mgs_topo_opts {
+  mgs_topo_construction construction;
+  mgs_topo_filtration filtration;
+  double half_width;      /* clamp w: values clamped to [-w, w]; INFINITY = no clamp.
+                             VDB path: w is also limited to the grid's |background| */
+  double min_persistence; /* report pairs with death - birth > this (0: all positive) */
+  double voxel_size;      /* world = origin + voxel_size * ijk (dense path; VDB: grid's) */
+  double origin[3];
+} mgs_topo_opts;
+
+void mgs_topo_opts_default(mgs_topo_opts *o); /* V, sublevel, w = inf, 0, 1, (0,0,0) */
+
+typedef struct mgs_topo_stats {
+  size_t active_voxels;   /* voxels the engine looked at (dense: all; sparse: leaf voxels) */
+  size_t leaves, tiles;   /* sparse input blocks */
+  size_t cells_total;     /* cells of the full complex on the bounding box (implicit) */
+  size_t cells_built;     /* cells kept after dropping +w cells and collapsing -w cells:
+                             the cells the pairing stages actually touch */
+  size_t critical_cells;  /* cells in positive-persistence pairs or essential classes, i.e.
+                             what an optimal discrete gradient would leave critical. NOTE: no
+                             discrete gradient is built yet; all cells_built are reduced. */
+  double reduction_ratio; /* 1 - critical_cells / cells_total */
+  size_t pairs_d[3];      /* reported pairs per dimension (incl. essential) */
+  size_t truncated;       /* reported pairs set by the clamp */
+  double effective_w;     /* clamp actually used */
+  double seconds_build, seconds_pairs, seconds;
+  size_t peak_bytes;      /* engine's own largest allocation footprint (estimate) */
+} mgs_topo_stats;
+
+/* Dense field, nx*ny*nz finite values. opts NULL = defaults. The diagram's n_cells,
+ * n_critical, n_active_voxels and seconds are filled too. */
+mgs_status mgs_topo_persistence_dense(const float *values, int nx, int ny, int nz,
+                                      const mgs_topo_opts *opts, mgs_diagram **out,
+                                      mgs_error *err);
+/* Same, with the full statistics (stats may be NULL). */
+mgs_status mgs_topo_persistence_dense_stats(const float *values, int nx, int ny, int nz,
+                                            const mgs_topo_opts *opts, mgs_diagram **out,
+                                            mgs_topo_stats *stats, mgs_error *err);
+
+/* ---------------------------------------------------------------- sparse input
+ * 8³ leaf blocks (values in OpenVDB order (x<<6)|(y<<3)|z, origin a multiple of 8) plus
+ * constant tiles (any multiple-of-8 cube) and a background value for everything else.
+ * Values are copied. Used by the VDB path, the benchmark and tests. */
+typedef struct mgs_topo_sparse mgs_topo_sparse;
+mgs_status mgs_topo_sparse_create(float background, mgs_topo_sparse **out, mgs_error *err);
+void mgs_topo_sparse_destroy(mgs_topo_sparse *s);
+mgs_status mgs_topo_sparse_add_leaf(mgs_topo_sparse *s, const int32_t origin[3],
+                                    const float values[512], mgs_error *err);
+mgs_status mgs_topo_sparse_add_tile(mgs_topo_sparse *s, const int32_t origin[3], int32_t dim,
+                                    float value, mgs_error *err);
+size_t mgs_topo_sparse_leaf_count(const mgs_topo_sparse *s);
+/* Test/bench helper: blocks of a dense field (layout as above, voxel (0,0,0) at index 0)
+ * whose clamped values are all equal become tiles, the others leaves; background = +w. */
+mgs_status mgs_topo_sparse_from_dense(const float *values, int nx, int ny, int nz, float w,
+                                      mgs_topo_sparse **out, mgs_error *err);
+
+/* The band's top value is the (sign-applied) background: +w for a level set (w limited to the
+ * background), 0 for a fog volume with the superlevel filtration (values above the top are
+ * clamped to it). It must exceed -w. Tiles strictly between -w and the top are expanded to
+ * voxels (they cost per voxel); -w tiles and the background cost per block. */
+mgs_status mgs_topo_persistence_sparse(const mgs_topo_sparse *s, const mgs_topo_opts *opts,
+                                       mgs_diagram **out, mgs_topo_stats *stats,
+                                       mgs_error *err);
+
+/* A VDB grid's narrow band (leaves + inactive tiles; background outside). Level sets use the
+ * sublevel filtration and w = min(opts->half_width, background); voxel size and origin come
+ * from the grid. Errors: non-finite values, a band that lets interior (-w) voxels touch the
+ * background (+w) directly ("broken narrow band"). */
+mgs_status mgs_topo_persistence_vdb(const mgs_vdb_grid *g, const mgs_topo_opts *opts,
+                                    mgs_diagram **out, mgs_error *err);
+mgs_status mgs_topo_persistence_vdb_stats(const mgs_vdb_grid *g, const mgs_topo_opts *opts,
+                                          mgs_diagram **out, mgs_topo_stats *stats,
+                                          mgs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

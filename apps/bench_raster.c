@@ -33,7 +33,9 @@
 #include "core/mgs_log.h"
 #include "core/mgs_parallel.h"
 #include "core/mgs_rng.h"
+#include "render/mgs_loss.h"
 #include "render/mgs_raster.h"
+#include "train/mgs_train.h"
 #if defined(__AVX512F__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
@@ -208,11 +210,137 @@ static int run_case(int size, size_t n, double min_time, bench_result *res) {
   return 0;
 }
 
+/* ---- a whole training iteration (--iteration) ----
+ * The trainer's steady-state step (train/trainer.c) on the benchmark scene with SH degree
+ * 3 active: forward, (1-0.2) L1 + 0.2 D-SSIM against a fixed target image (a render of
+ * another random scene of the same kind), backward, Adam on every group with the reference
+ * learning rates (which also clears the gradients for the next backward, as the trainer). Each phase is timed in wall and process CPU time
+ * (all threads); medians over the iterations, after two warm-up iterations. */
+enum { PH_PROJECT, PH_BIN, PH_FWD_TILES, PH_LOSS, PH_ZERO, PH_BWD_TILES, PH_BWD_GAUSS, PH_ADAM, PH_TOTAL, PH_N };
+static const char *const ph_name[PH_N] = {"project+SH", "bin+sort", "forward tiles", "loss L1+SSIM", "zero grads",
+                                          "backward tiles", "per-Gaussian bwd", "Adam", "full iteration"};
+
+static void read_loadavg(char *buf, size_t len) {
+  buf[0] = 0;
+  FILE *f = fopen("/proc/loadavg", "r");
+  if (!f) { snprintf(buf, len, "?"); return; }
+  if (!fgets(buf, (int)len, f)) snprintf(buf, len, "?");
+  fclose(f);
+  size_t l = strlen(buf);
+  if (l && buf[l - 1] == '\n') buf[l - 1] = 0;
+}
+
+static int run_iteration(int size, size_t n, int iters) {
+  mgs_error err;
+  mgs_error_clear(&err);
+  mgs_gaussians *g = bench_scene(n, 12345), *other = bench_scene(n, 777);
+  mgs_gaussians *grad = mgs_gaussians_create(n, 3);
+  mgs_adam *adam = mgs_adam_create(n);
+  size_t first;
+  if (!g || !other || !grad || !adam || mgs_gaussians_append(grad, n, &first, &err) != MGS_OK) {
+    fprintf(stderr, "morsegs bench raster: out of memory for %zu Gaussians\n", n);
+    return 1;
+  }
+  /* the reference learning rates (scene extent ~ 2) */
+  adam->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; adam->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; adam->lr[MGS_PARAM_ROT] = 1e-3f;
+  adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
+  adam->sh_rest_active = 15;
+  mgs_camera cam;
+  mgs_camera_init_fovx(&cam, size, size, 60.0 * 3.14159265358979 / 180.0);
+  double eye[3] = {2.4, -2.8, 1.6}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+  mgs_camera_look_at(&cam, eye, target, up);
+  mgs_raster_settings s;
+  mgs_raster_settings_default(&s);
+  s.sh_degree = 3;
+  s.background[0] = s.background[1] = s.background[2] = 1.0f;
+  mgs_raster *r = mgs_raster_create();
+  size_t np = (size_t)size * size * 3;
+  float *gt = malloc(np * sizeof(float)), *dl = malloc(np * sizeof(float)), *gm = malloc(n * sizeof(float));
+  if (!r || !gt || !dl || !gm) { fprintf(stderr, "morsegs bench raster: out of memory\n"); return 1; }
+  mgs_raster_output out;
+  if (mgs_raster_forward(r, other, &cam, &s, &out, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+  memcpy(gt, out.color, np * sizeof(float));
+  mgs_gaussians_destroy(other);
+  double (*wall)[PH_N] = calloc((size_t)iters, sizeof *wall), (*cpu)[PH_N] = calloc((size_t)iters, sizeof *cpu);
+  if (!wall || !cpu) { fprintf(stderr, "morsegs bench raster: out of memory\n"); return 1; }
+  char la0[128], la1[128];
+  read_loadavg(la0, sizeof la0);
+  const float lam = 0.2f;
+  double loss = 0;
+  size_t isect = 0;
+  int clean = 0;
+  for (int it = -2; it < iters; it++) {
+    double w[PH_N + 1], c[PH_N + 1];
+    c[0] = cpu_now(); w[0] = mgs_now();
+    if (mgs_raster_forward(r, g, &cam, &s, &out, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+    w[1] = mgs_now(); c[1] = cpu_now();
+    memset(dl, 0, np * sizeof(float));
+    double l1 = mgs_loss_l1(out.color, gt, size, size, 3, 1.0f - lam, dl);
+    double ss = mgs_ssim(out.color, gt, size, size, 3, -lam, dl);
+    loss = (1.0 - lam) * l1 + lam * (1.0 - ss);
+    (void)mgs_psnr(out.color, gt, size, size, 3); /* the trainer's progress figure */
+    w[2] = mgs_now(); c[2] = cpu_now();
+    if (!clean) /* as the trainer: Adam clears the gradients it consumed */
+      for (int k = 0; k < MGS_PARAM_COUNT; k++)
+        memset(mgs_gaussians_group(grad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
+    w[3] = mgs_now(); c[3] = cpu_now();
+    if (mgs_raster_backward(r, dl, NULL, NULL, grad, gm, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+    w[4] = mgs_now(); c[4] = cpu_now();
+    if (mgs_adam_step_zero(adam, g, grad, (1u << MGS_PARAM_COUNT) - 1, 1, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+    clean = 1;
+    w[5] = mgs_now(); c[5] = cpu_now();
+    if (it < 0) continue;
+    isect = out.n_intersections;
+    mgs_raster_profile p;
+    mgs_raster_last_profile(r, &p);
+    double *W = wall[it], *C = cpu[it];
+    W[PH_PROJECT] = p.project_ms; W[PH_BIN] = p.bin_ms; W[PH_FWD_TILES] = p.render_ms;
+    C[PH_PROJECT] = p.project_cpu; C[PH_BIN] = p.bin_cpu; C[PH_FWD_TILES] = p.render_cpu;
+    W[PH_LOSS] = (w[2] - w[1]) * 1e3; C[PH_LOSS] = (c[2] - c[1]) * 1e3;
+    W[PH_ZERO] = (w[3] - w[2]) * 1e3; C[PH_ZERO] = (c[3] - c[2]) * 1e3;
+    W[PH_BWD_TILES] = p.tiles_ms; C[PH_BWD_TILES] = p.tiles_cpu;
+    /* the per-Gaussian part takes the rest of the backward call (gradient-norm clear too) */
+    W[PH_BWD_GAUSS] = (w[4] - w[3]) * 1e3 - p.tiles_ms; C[PH_BWD_GAUSS] = (c[4] - c[3]) * 1e3 - p.tiles_cpu;
+    W[PH_ADAM] = (w[5] - w[4]) * 1e3; C[PH_ADAM] = (c[5] - c[4]) * 1e3;
+    W[PH_TOTAL] = (w[5] - w[0]) * 1e3; C[PH_TOTAL] = (c[5] - c[0]) * 1e3;
+  }
+  read_loadavg(la1, sizeof la1);
+  printf("full training iteration: %dx%d, %zu Gaussians, SH degree 3, %zu tile intersections, %d iterations "
+         "(median), %d threads, final loss %.4f\n", size, size, n, isect, iters, mgs_parallel_max_threads(), loss);
+  printf("load average before: %s | after: %s\n", la0, la1);
+  printf("  %-18s %9s %9s\n", "phase", "wall ms", "CPU ms");
+  double col[2][PH_N];
+  double *tmp = malloc((size_t)iters * sizeof(double));
+  for (int k = 0; k < PH_N; k++)
+    for (int which = 0; which < 2; which++) {
+      for (int i = 0; i < iters; i++) tmp[i] = which ? cpu[i][k] : wall[i][k];
+      qsort(tmp, (size_t)iters, sizeof(double), cmp_double);
+      col[which][k] = tmp[iters / 2];
+    }
+  double sw = 0, sc = 0;
+  for (int k = 0; k < PH_N; k++) {
+    if (k == PH_TOTAL) printf("  %-18s %9.2f %9.2f\n", "(sum of medians)", sw, sc);
+    printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
+    if (k < PH_TOTAL) { sw += col[0][k]; sc += col[1][k]; }
+  }
+  printf("full iteration %dx%d %zuk SH3: %.2f ms wall, %.2f ms CPU (median; load %s)\n", size, size, n / 1000, col[0][PH_TOTAL],
+         col[1][PH_TOTAL], la1);
+  free(tmp); free(wall); free(cpu);
+  free(gt); free(dl); free(gm);
+  mgs_raster_destroy(r);
+  mgs_adam_destroy(adam);
+  mgs_gaussians_destroy(g);
+  mgs_gaussians_destroy(grad);
+  return 0;
+}
+
 int mgs_bench_raster(int argc, char **argv) {
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"threads", required_argument, 0, 't'},
                                            {"size", required_argument, 0, 's'}, {"gaussians", required_argument, 0, 'n'},
+                                           {"iteration", no_argument, 0, 'I'}, {"iters", required_argument, 0, 'i'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0;
+  int quick = 0, iteration = 0;
+  long iters = 50;
   long threads = 0, one_size = 0, one_n = 0;
   optind = 1;
   opterr = 0;
@@ -221,6 +349,11 @@ int mgs_bench_raster(int argc, char **argv) {
     char *end = NULL;
     switch (c) {
     case 'q': quick = 1; break;
+    case 'I': iteration = 1; break;
+    case 'i':
+      iters = strtol(optarg, &end, 10);
+      if (*end || iters < 1 || iters > 100000) { fprintf(stderr, "morsegs bench raster: bad --iters '%s'\n", optarg); return 2; }
+      break;
     case 't':
       threads = strtol(optarg, &end, 10);
       if (*end || threads < 1 || threads > 1024) { fprintf(stderr, "morsegs bench raster: bad --threads '%s'\n", optarg); return 2; }
@@ -234,18 +367,22 @@ int mgs_bench_raster(int argc, char **argv) {
       if (*end || one_n < 1 || one_n > 100000000) { fprintf(stderr, "morsegs bench raster: bad --gaussians '%s'\n", optarg); return 2; }
       break;
     case 'h':
-      printf("usage: morsegs bench raster [--quick] [--threads N]\n"
+      printf("usage: morsegs bench raster [--quick] [--threads N] [--iteration [--iters N]]\n"
              "Forward and backward ms of the rasterizer at 200x200 and 800x800 with 10k, 100k and 1M\n"
              "Gaussians (SH degree 3), tile intersections, and the fraction of the measured peak FLOP/s.\n"
              "  --quick      only 200x200 with 10k and 100k Gaussians\n"
              "  --threads N  worker threads (default: all cores)\n"
-             "  --size S --gaussians N  one case only (SxS image, N Gaussians)\n");
+             "  --size S --gaussians N  one case only (SxS image, N Gaussians)\n"
+             "  --iteration  a whole training iteration instead (forward, L1+D-SSIM, backward, Adam; SH 3)\n"
+             "               split by phase, wall and CPU ms; default 200x200, 100k Gaussians\n"
+             "  --iters N    iterations timed by --iteration (50)\n");
       return 0;
     default: fprintf(stderr, "morsegs bench raster: bad option %s (see --help)\n", argv[optind - 1]); return 2;
     }
   }
   if (optind < argc) { fprintf(stderr, "morsegs bench raster: unexpected argument '%s'\n", argv[optind]); return 2; }
   if (threads > 0) mgs_parallel_set_threads((int)threads);
+  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters);
   int nthr = mgs_parallel_max_threads();
   const char *isa = "";
   double peak = measure_peak(&isa);

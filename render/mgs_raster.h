@@ -68,10 +68,12 @@ void mgs_raster_destroy(mgs_raster *r);
 /* Statistics of the last forward/backward on this context (for the benchmark): number of
  * Gaussian x pixel evaluations performed (counted per 16-pixel tile row). */
 void mgs_raster_last_evals(const mgs_raster *r, double *forward, double *backward);
-/* Wall time (ms) of the phases of the last forward/backward on this context. */
+/* Wall time (ms) of the phases of the last forward/backward on this context, and the
+ * process CPU time (ms, all threads) over the same intervals. */
 typedef struct mgs_raster_profile {
   double project_ms, bin_ms, render_ms;    /* forward */
   double tiles_ms, reduce_ms;              /* backward: per-tile gradients, per-Gaussian chain */
+  double project_cpu, bin_cpu, render_cpu, tiles_cpu, reduce_cpu;
 } mgs_raster_profile;
 void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
 

@@ -148,6 +148,11 @@ static void reduce_range(void *ctx, size_t b, size_t e) {
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
+    /* the SH backward addresses lanes relative to the first: keep the spread small */
+    if (nl && i - idx[0] >= (1u << 24)) {
+      mgs_raster_project_backward16(r, idx, nl, gsum, bc->grad, bc->grad_mean2d);
+      nl = 0;
+    }
     float gs[GS_N] = {0};
     const float *q = r->isect_grad + (size_t)r->gauss_off[i] * GS_N;
     for (uint32_t s = 0; s < cnt; s++, q += GS_N)
@@ -173,12 +178,14 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: gradient model has %zu Gaussians (SH %d), "
                          "the forward had %zu (SH %d)", grad->n, grad->sh_degree, r->n, r->s.sh_degree);
   if (grad_mean2d) memset(grad_mean2d, 0, r->n * sizeof(float));
-  double t0 = mgs_now();
+  double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
   mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
-  double t1 = mgs_now();
+  double t1 = mgs_now(), c1 = mgs_raster_cpu_now();
   bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, grad, grad_mean2d};
   mgs_parallel_for(0, r->n, 1024, reduce_range, &bc);
   r->prof.tiles_ms = (t1 - t0) * 1e3;
   r->prof.reduce_ms = (mgs_now() - t1) * 1e3;
+  r->prof.tiles_cpu = (c1 - c0) * 1e3;
+  r->prof.reduce_cpu = (mgs_raster_cpu_now() - c1) * 1e3;
   return MGS_OK;
 }

@@ -2,7 +2,14 @@
  * state training allocates nothing). */
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include "render/raster_internal.h"
+
+double mgs_raster_cpu_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 void mgs_raster_settings_default(mgs_raster_settings *s) {
   s->background[0] = s->background[1] = s->background[2] = 0;

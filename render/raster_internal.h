@@ -91,6 +91,15 @@ void mgs_sh_eval(int deg, const float *dc, const float *rest, const float dir[3]
 /* dL_drgb: gradient w.r.t. the unclamped colour. Adds into dc, rest, returns dL/ddir. */
 void mgs_sh_backward(int deg, const float *dc, const float *rest, const float dir[3],
                      const float dL_drgb[3], float *g_dc, float *g_rest, float dL_ddir[3]);
+#if defined(__AVX512F__)
+/* The same for 16 Gaussians at once: lane[l] is lane l's Gaussian index relative to the
+ * arrays passed (dc: 3 floats per Gaussian, rest: MGS_SH_REST_MAX), lanes outside `mask`
+ * are neither read nor written. Results identical to the scalar functions. */
+void mgs_sh_eval16(int deg, const float *dc, const float *rest, const int32_t *lane, uint16_t mask,
+                   const float dir[3][16], float rgb[3][16]);
+void mgs_sh_backward16(int deg, const float *rest, const int32_t *lane, uint16_t mask, const float dir[3][16],
+                       const float dL_drgb[3][16], float *g_dc, float *g_rest, float dL_ddir[3][16]);
+#endif
 /* raster_bin.c */
 mgs_status mgs_raster_bin(mgs_raster *r, mgs_error *err);
 /* raster_forward.c / raster_backward.c */
@@ -98,6 +107,7 @@ void mgs_raster_render_tiles(mgs_raster *r);
 void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
                                const float *dL_ddepth);
 /* raster_context.c */
+double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
 

@@ -146,10 +146,20 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
     pb.logit[l] = ok ? g->opacity[i] : 0.0f;
   }
   block_vector_part(pc, &pb);
+  /* per lane, part 1: culling, screen position, reference tile rect, view direction */
+  double udl[16], vdl[16];
+  int rect[4][16];
+  float dirl[3][16], distl[16], rgbl[3][16];
+  int32_t lane[16];
+  uint16_t shmask = 0;
+  for (int l = 0; l < 16; l++) {
+    lane[l] = 0;
+    dirl[0][l] = dirl[1][l] = dirl[2][l] = 0;
+  }
   for (int l = 0; l < nl; l++) {
     if (!pb.alive[l]) continue;
     size_t i = i0 + (size_t)l;
-    float a = pb.a[l], c = pb.c[l], det = pb.det[l], radius = pb.radius[l];
+    float det = pb.det[l], radius = pb.radius[l];
     float A = pb.A[l], B = pb.B[l], C = pb.C[l];
     if (!(det > 0) || !isfinite(det)) { cull(r, i); continue; }
     double td[3] = {pb.td[0][l], pb.td[1][l], pb.td[2][l]};
@@ -165,27 +175,54 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
     int y0 = clamp_tile((py - radius) / MGS_TILE_SIZE, r->tiles_y);
     int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) / MGS_TILE_SIZE, r->tiles_y);
     if ((x1 - x0) * (y1 - y0) == 0) { cull(r, i); continue; }
-
-    float op = pb.op[l];
-    /* colour from SH, view direction in double (far-from-origin scenes) */
-    mgs_proj_aux *ax = &r->aux[i];
+    udl[l] = ud; vdl[l] = vd;
+    rect[0][l] = x0; rect[1][l] = y0; rect[2][l] = x1; rect[3][l] = y1;
+    /* view direction in double (far-from-origin scenes) */
     double dd[3] = {g->mean[3 * i] - pc->campos[0], g->mean[3 * i + 1] - pc->campos[1], g->mean[3 * i + 2] - pc->campos[2]};
     double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
-    float dir[3] = {0, 0, 0};
     if (dist > 0) {
       double id = 1.0 / dist;
-      for (int k = 0; k < 3; k++) dir[k] = (float)(dd[k] * id);
+      for (int k = 0; k < 3; k++) dirl[k][l] = (float)(dd[k] * id);
     }
-    float rgb[3];
-    mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, dir, rgb);
+    distl[l] = (float)dist;
+    lane[l] = l;
+    shmask |= (uint16_t)(1u << l);
+  }
+  /* colour from SH, 16 lanes at once */
+#if defined(__AVX512F__)
+  if (shmask)
+    mgs_sh_eval16(r->s.sh_degree, g->sh_dc + 3 * i0, g->sh_rest + (size_t)MGS_SH_REST_MAX * i0, lane, shmask, dirl, rgbl);
+#else
+  (void)lane;
+  for (int l = 0; l < nl; l++) {
+    if (!(shmask & (1u << l))) continue;
+    size_t i = i0 + (size_t)l;
+    float d3[3] = {dirl[0][l], dirl[1][l], dirl[2][l]}, c3[3];
+    mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, d3, c3);
+    for (int k = 0; k < 3; k++) rgbl[k][l] = c3[k];
+  }
+#endif
+  /* per lane, part 2 */
+  for (int l = 0; l < nl; l++) {
+    if (!(shmask & (1u << l))) continue;
+    size_t i = i0 + (size_t)l;
+    float a = pb.a[l], c = pb.c[l];
+    float A = pb.A[l], B = pb.B[l], C = pb.C[l];
+    double ud = udl[l], vd = vdl[l];
+    int x0 = rect[0][l], y0 = rect[1][l], x1 = rect[2][l], y1 = rect[3][l];
+    float radius = pb.radius[l];
+    float op = pb.op[l];
+    mgs_proj_aux *ax = &r->aux[i];
     mgs_splat *sp = &r->splat[i];
+    float rgb[3] = {rgbl[0][l], rgbl[1][l], rgbl[2][l]};
     for (int k = 0; k < 3; k++) {
       ax->clamped[k] = rgb[k] < 0;
       sp->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
-      ax->dir[k] = dir[k];
+      ax->dir[k] = dirl[k][l];
     }
     if (!isfinite(sp->rgb[0]) || !isfinite(sp->rgb[1]) || !isfinite(sp->rgb[2])) { cull(r, i); continue; }
-    ax->dist = (float)dist;
+    float dist = distl[l];
+    ax->dist = dist;
     ax->t[0] = pb.tx[l]; ax->t[1] = pb.ty[l]; ax->t[2] = pb.tz[l];
     ax->txc = pb.txc[l]; ax->tyc = pb.tyc[l];
     for (int k = 0; k < 9; k++) ax->R[k] = pb.R[k][l];
@@ -352,19 +389,41 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
     v16f nx = gu * (0.5f * (float)cam->width), ny = gv * (0.5f * (float)cam->height);
     v16f_store(gm, v16f_sqrt(nx * nx + ny * ny));
   }
-  /* per lane: SH backward, the view-direction part of the mean, the additions */
+  /* SH backward, 16 lanes at once */
+  float dirl[3][16], drgb[3][16], ddir[3][16];
+  int32_t lane[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[ok ? idx[l] : idx[0]];
+    lane[l] = ok ? (int32_t)(idx[l] - idx[0]) : 0;
+    for (int k = 0; k < 3; k++) {
+      dirl[k][l] = ax->dir[k];
+      drgb[k][l] = (!ok || ax->clamped[k]) ? 0.0f : gsum[GS_R + k][l];
+    }
+  }
+#if defined(__AVX512F__)
+  /* lanes are relative to idx[0] (the caller keeps the spread below 2^31 / 45) */
+  mgs_sh_backward16(r->s.sh_degree, g->sh_rest + (size_t)MGS_SH_REST_MAX * idx[0], lane, (uint16_t)((1u << nl) - 1), dirl, drgb,
+                    grad->sh_dc + 3 * (size_t)idx[0], grad->sh_rest + (size_t)MGS_SH_REST_MAX * idx[0], ddir);
+#else
+  (void)lane;
+  for (int l = 0; l < nl; l++) {
+    size_t i = idx[l];
+    float d3[3] = {dirl[0][l], dirl[1][l], dirl[2][l]}, g3[3] = {drgb[0][l], drgb[1][l], drgb[2][l]}, o3[3];
+    mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, d3, g3,
+                    grad->sh_dc + 3 * i, grad->sh_rest + (size_t)MGS_SH_REST_MAX * i, o3);
+    for (int k = 0; k < 3; k++) ddir[k][l] = o3[k];
+  }
+#endif
+  /* per lane: the view-direction part of the mean, the additions */
   for (int l = 0; l < nl; l++) {
     size_t i = idx[l];
     const mgs_proj_aux *ax = &r->aux[i];
     const mgs_splat *sp = &r->splat[i];
     float dmean[3] = {dm[0][l], dm[1][l], dm[2][l]};
-    float drgb[3], ddir[3];
-    for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gsum[GS_R + k][l];
-    mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir,
-                    drgb, grad->sh_dc + 3 * i, grad->sh_rest + (size_t)MGS_SH_REST_MAX * i, ddir);
     if (ax->dist > 0) {
-      float dd = ax->dir[0] * ddir[0] + ax->dir[1] * ddir[1] + ax->dir[2] * ddir[2];
-      for (int k = 0; k < 3; k++) dmean[k] += (ddir[k] - ax->dir[k] * dd) / ax->dist;
+      float dd = ax->dir[0] * ddir[0][l] + ax->dir[1] * ddir[1][l] + ax->dir[2] * ddir[2][l];
+      for (int k = 0; k < 3; k++) dmean[k] += (ddir[k][l] - ax->dir[k] * dd) / ax->dist;
     }
     for (int k = 0; k < 3; k++) grad->mean[3 * i + k] += dmean[k];
     grad->opacity[i] += gsum[GS_OP][l] * sp->opacity * (1.0f - sp->opacity);

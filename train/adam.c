@@ -6,6 +6,9 @@
 #include <string.h>
 #include "train/mgs_train.h"
 #include "core/mgs_parallel.h"
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 mgs_adam *mgs_adam_create(size_t n) {
   mgs_adam *a = calloc(1, sizeof *a);
@@ -68,41 +71,104 @@ void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group) {
   memset(a->v[group], 0, a->n * d * sizeof(float));
 }
 
+/* One fused pass: every selected group's elements are cut into units of ADAM_UNIT floats
+ * (whole rows for a partly active SH-rest group) and all units of all groups go through
+ * one parallel loop. The element loop is written so the compiler vectorizes it (restrict
+ * pointers, constants in locals, the finiteness test as arithmetic). */
+#define ADAM_UNIT 8192
 typedef struct {
-  float *p, *m, *v;
-  const float *g;
+  float *p, *m, *v, *g;
   float b1, b2, step_size, inv_sqrt_bc2, eps;
-  size_t row, used; /* floats per row, of which the first `used` are updated */
-  atomic_int bad;
+  size_t row, used;   /* floats per row, of which the first `used` are updated */
+  size_t n_elem;      /* elements (used == row) or rows (partial) */
+  size_t unit0;       /* first unit of this group in the global numbering */
+  size_t per_unit;    /* elements or rows per unit */
+} adam_group;
+
+typedef struct {
+  adam_group grp[MGS_PARAM_COUNT];
+  int n_grp;
+  int zero_grad;
+  atomic_int bad;     /* bit k: group k had a non-finite value */
 } step_ctx;
 
-static int step_span(step_ctx *c, size_t b, size_t e) {
+static int step_span(const adam_group *c, size_t b, size_t e) {
+  float *restrict P = c->p, *restrict M = c->m, *restrict V = c->v;
+  const float *restrict G = c->g;
+  const float b1 = c->b1, b2 = c->b2, ob1 = 1 - c->b1, ob2 = 1 - c->b2;
+  const float ss = c->step_size, isb = c->inv_sqrt_bc2, eps = c->eps;
   int bad = 0;
-  for (size_t i = b; i < e; i++) {
-    float g = c->g[i];
-    float m = c->b1 * c->m[i] + (1 - c->b1) * g;
-    float v = c->b2 * c->v[i] + (1 - c->b2) * g * g;
-    c->m[i] = m; c->v[i] = v;
-    float p = c->p[i] - c->step_size * m / (sqrtf(v) * c->inv_sqrt_bc2 + c->eps);
-    c->p[i] = p;
+  size_t i = b;
+#if defined(__AVX512F__)
+  /* the scalar loop's operations in the same order, no contraction: identical results */
+  const __m512 vb1 = _mm512_set1_ps(b1), vb2 = _mm512_set1_ps(b2), vob1 = _mm512_set1_ps(ob1), vob2 = _mm512_set1_ps(ob2);
+  const __m512 vss = _mm512_set1_ps(ss), visb = _mm512_set1_ps(isb), veps = _mm512_set1_ps(eps), zero = _mm512_setzero_ps();
+  __mmask16 badm = 0;
+  for (; i + 16 <= e; i += 16) {
+    __m512 g = _mm512_loadu_ps(G + i);
+    __m512 m = _mm512_add_ps(_mm512_mul_ps(vb1, _mm512_loadu_ps(M + i)), _mm512_mul_ps(vob1, g));
+    __m512 v = _mm512_add_ps(_mm512_mul_ps(vb2, _mm512_loadu_ps(V + i)), _mm512_mul_ps(_mm512_mul_ps(vob2, g), g));
+    _mm512_storeu_ps(M + i, m);
+    _mm512_storeu_ps(V + i, v);
+    __m512 den = _mm512_add_ps(_mm512_mul_ps(_mm512_sqrt_ps(v), visb), veps);
+    __m512 p = _mm512_sub_ps(_mm512_loadu_ps(P + i), _mm512_div_ps(_mm512_mul_ps(vss, m), den));
+    _mm512_storeu_ps(P + i, p);
+    __m512 chk = _mm512_add_ps(_mm512_sub_ps(p, p), _mm512_sub_ps(g, g));
+    badm |= _mm512_cmp_ps_mask(chk, zero, _CMP_NEQ_UQ);
+  }
+  bad = badm != 0;
+#endif
+  for (; i < e; i++) {
+    float g = G[i];
+    float m = b1 * M[i] + ob1 * g;
+    float v = b2 * V[i] + ob2 * g * g;
+    M[i] = m; V[i] = v;
+    float p = P[i] - ss * m / (sqrtf(v) * isb + eps);
+    P[i] = p;
     bad |= !isfinite(p) || !isfinite(g);
   }
   return bad;
 }
 
-static void step_range(void *vc, size_t b, size_t e) {
+static void step_units(void *vc, size_t ub, size_t ue) {
   step_ctx *c = vc;
   int bad = 0;
-  if (c->used == c->row) bad = step_span(c, b, e);
-  else /* b, e count rows */
-    for (size_t r = b; r < e; r++) bad |= step_span(c, r * c->row, r * c->row + c->used);
-  if (bad) atomic_store(&c->bad, 1);
+  for (size_t u = ub; u < ue; u++) {
+    int k = c->n_grp - 1;
+    while (k > 0 && c->grp[k].unit0 > u) k--;
+    const adam_group *gp = &c->grp[k];
+    size_t b = (u - gp->unit0) * gp->per_unit, e = b + gp->per_unit;
+    if (e > gp->n_elem) e = gp->n_elem;
+    int ub_bad = 0;
+    if (gp->used == gp->row) {
+      ub_bad = step_span(gp, b, e);
+      if (c->zero_grad && !ub_bad) memset(gp->g + b, 0, (e - b) * sizeof(float));
+    } else { /* b, e count rows */
+      for (size_t r = b; r < e; r++) ub_bad |= step_span(gp, r * gp->row, r * gp->row + gp->used);
+      if (c->zero_grad && !ub_bad)
+        for (size_t r = b; r < e; r++) memset(gp->g + r * gp->row, 0, gp->used * sizeof(float));
+    }
+    /* a unit with a non-finite value keeps its gradients for the report */
+    if (ub_bad) bad |= 1 << k;
+  }
+  if (bad) atomic_fetch_or(&c->bad, bad);
 }
 
 mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians *grad,
                          unsigned group_mask, mgs_error *err) {
+  return mgs_adam_step_zero(a, model, (mgs_gaussians *)grad, group_mask, 0, err);
+}
+
+mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad,
+                              unsigned group_mask, int zero_grad, mgs_error *err) {
   if (a->n != model->n || grad->n != model->n)
     return mgs_error_set(err, MGS_ERR_ARG, "adam: %zu moments for %zu Gaussians (%zu gradients)", a->n, model->n, grad->n);
+  step_ctx c;
+  memset(&c, 0, sizeof c);
+  c.zero_grad = zero_grad;
+  atomic_init(&c.bad, 0);
+  int gid[MGS_PARAM_COUNT];
+  size_t units = 0;
   for (int gi = 0; gi < MGS_PARAM_COUNT; gi++) {
     if (!(group_mask & (1u << gi))) continue;
     mgs_param_group grp = (mgs_param_group)gi;
@@ -110,32 +176,39 @@ mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians 
     a->t[gi]++;
     double bc1 = 1.0 - pow(a->beta1, (double)a->t[gi]);
     double bc2 = 1.0 - pow(a->beta2, (double)a->t[gi]);
-    step_ctx c;
-    c.p = mgs_gaussians_group(model, grp);
-    c.m = a->m[gi]; c.v = a->v[gi];
-    c.g = mgs_gaussians_group((mgs_gaussians *)grad, grp);
-    c.b1 = (float)a->beta1; c.b2 = (float)a->beta2;
-    c.step_size = (float)(a->lr[gi] / bc1);
-    c.inv_sqrt_bc2 = (float)(1.0 / sqrt(bc2));
-    c.eps = (float)a->eps;
-    atomic_init(&c.bad, 0);
-    c.row = d;
-    c.used = d;
-    if (grp == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) c.used = 3 * (size_t)a->sh_rest_active;
-    size_t total = model->n * d;
-    if (c.used == 0) continue;
-    if (c.used == d) { if (total) mgs_parallel_for(0, total, 16384, step_range, &c); }
-    else if (model->n) mgs_parallel_for(0, model->n, 1024, step_range, &c);
-    if (atomic_load(&c.bad)) {
-      for (size_t i = 0; i < total; i++) {
-        if (i % d >= c.used) continue;
-        if (!isfinite(c.g[i]))
-          return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite gradient in parameter group '%s' (Gaussian %zu)",
-                               mgs_param_name(grp), i / d);
-        if (!isfinite(c.p[i]))
-          return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite value in parameter group '%s' (Gaussian %zu) after the Adam step",
-                               mgs_param_name(grp), i / d);
-      }
+    adam_group *gp = &c.grp[c.n_grp];
+    gp->p = mgs_gaussians_group(model, grp);
+    gp->m = a->m[gi]; gp->v = a->v[gi];
+    gp->g = mgs_gaussians_group(grad, grp);
+    gp->b1 = (float)a->beta1; gp->b2 = (float)a->beta2;
+    gp->step_size = (float)(a->lr[gi] / bc1);
+    gp->inv_sqrt_bc2 = (float)(1.0 / sqrt(bc2));
+    gp->eps = (float)a->eps;
+    gp->row = d;
+    gp->used = d;
+    if (grp == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) gp->used = 3 * (size_t)a->sh_rest_active;
+    if (gp->used == 0 || model->n == 0) continue;
+    if (gp->used == d) { gp->n_elem = model->n * d; gp->per_unit = ADAM_UNIT; }
+    else { gp->n_elem = model->n; gp->per_unit = ADAM_UNIT / d; }
+    gp->unit0 = units;
+    units += (gp->n_elem + gp->per_unit - 1) / gp->per_unit;
+    gid[c.n_grp++] = gi;
+  }
+  if (units) mgs_parallel_for(0, units, 1, step_units, &c);
+  int bad = atomic_load(&c.bad);
+  for (int k = 0; k < c.n_grp && bad; k++) {
+    if (!(bad & (1 << k))) continue;
+    const adam_group *gp = &c.grp[k];
+    mgs_param_group grp = (mgs_param_group)gid[k];
+    size_t total = model->n * gp->row;
+    for (size_t i = 0; i < total; i++) {
+      if (i % gp->row >= gp->used) continue;
+      if (!isfinite(gp->g[i]))
+        return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite gradient in parameter group '%s' (Gaussian %zu)",
+                             mgs_param_name(grp), i / gp->row);
+      if (!isfinite(gp->p[i]))
+        return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite value in parameter group '%s' (Gaussian %zu) after the Adam step",
+                             mgs_param_name(grp), i / gp->row);
     }
   }
   return MGS_OK;

@@ -55,6 +55,12 @@ void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group);
  * Gaussian when a gradient or an updated value is not finite. */
 mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians *grad,
                          unsigned group_mask, mgs_error *err);
+/* The same, and with zero_grad != 0 the gradient values it consumed are set to zero in the
+ * same pass (the active part of each selected group; the next backward can then add into
+ * it without a separate clearing pass). Gradients of a group holding a non-finite value
+ * may be left as they were. */
+mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad,
+                              unsigned group_mask, int zero_grad, mgs_error *err);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);

@@ -116,25 +116,29 @@ void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES
   memcpy(out, t->phase_s, sizeof t->phase_s);
 }
 
-/* A gradient model with the model's count, zeroed. */
+/* A gradient model with the model's count, zeroed. The Adam step zeroes the gradients it
+ * consumes in the same pass; when nothing changed since (count, active SH degree), the
+ * clearing pass is skipped. */
 static mgs_status zero_grad(mgs_trainer *t, mgs_error *err) {
   size_t n = t->g->n;
+  int clean = t->grad_clean && t->grad_clean_n == n && t->grad->n == n && t->grad_clean_sh == t->adam->sh_rest_active;
+  t->grad_clean = 0;
   if (t->grad->capacity < n) {
     mgs_status st = mgs_gaussians_reserve(t->grad, n, err);
     if (st) return st;
   }
   t->grad->n = n;
-  for (int k = 0; k < MGS_PARAM_SH_REST; k++)
-    memset(mgs_gaussians_group(t->grad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
-  /* SH rest: only the coefficients of the active degree are read (by Adam) */
-  size_t used = 3 * (size_t)t->adam->sh_rest_active;
-  if (used == MGS_SH_REST_MAX) memset(t->grad->sh_rest, 0, n * MGS_SH_REST_MAX * sizeof(float));
-  else if (used)
-    for (size_t i = 0; i < n; i++) memset(t->grad->sh_rest + i * MGS_SH_REST_MAX, 0, used * sizeof(float));
-  mgs_status st = grow_floats(&t->gm2d, &t->gm_cap, n ? n : 1, err);
-  if (st) return st;
-  memset(t->gm2d, 0, n * sizeof(float));
-  return MGS_OK;
+  if (!clean) {
+    for (int k = 0; k < MGS_PARAM_SH_REST; k++)
+      memset(mgs_gaussians_group(t->grad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
+    /* SH rest: only the coefficients of the active degree are read (by Adam) */
+    size_t used = 3 * (size_t)t->adam->sh_rest_active;
+    if (used == MGS_SH_REST_MAX) memset(t->grad->sh_rest, 0, n * MGS_SH_REST_MAX * sizeof(float));
+    else if (used)
+      for (size_t i = 0; i < n; i++) memset(t->grad->sh_rest + i * MGS_SH_REST_MAX, 0, used * sizeof(float));
+  }
+  /* gm2d is cleared by the backward */
+  return grow_floats(&t->gm2d, &t->gm_cap, n ? n : 1, err);
 }
 
 /* Names the parameter group holding a non-finite value, else describes `what`. */
@@ -199,7 +203,13 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->phase_s[3] += t4 - t3;
   unsigned mask = ((1u << MGS_PARAM_COUNT) - 1) & ~ss.replaced_groups;
   if (it < o->iterations && !o->freeze && mask && t->g->n == t->grad->n) {
-    st = mgs_adam_step(t->adam, t->g, t->grad, mask, err);
+    int all = mask == (1u << MGS_PARAM_COUNT) - 1;
+    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, all, err);
+    if (st == MGS_OK && all) {
+      t->grad_clean = 1;
+      t->grad_clean_n = t->g->n;
+      t->grad_clean_sh = t->adam->sh_rest_active;
+    }
     if (st == MGS_ERR_NUMERIC) {
       char msg[MGS_ERROR_MSG_MAX];
       snprintf(msg, sizeof msg, "%s", err ? err->msg : "non-finite value");

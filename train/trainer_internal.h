@@ -22,6 +22,9 @@ struct mgs_trainer {
   float *dl;                    /* dL/dcolor */
   size_t dl_cap;
   float *gm2d;                  /* per-Gaussian NDC 2D-mean gradient norm */
+  int grad_clean;               /* the last Adam step zeroed the gradients it read ... */
+  size_t grad_clean_n;          /* ... of this many Gaussians ... */
+  int grad_clean_sh;            /* ... with this many active SH-rest coefficients */
   size_t gm_cap;
   double seconds;               /* training wall time */
   double ema_loss, ema_psnr;    /* the reference's 0.4/0.6 moving average */

@@ -111,8 +111,12 @@ static mgs_status build_sparse(const scene *s, mgs_topo_sparse **out, size_t *ac
 
 typedef struct result {
   int ok;
-  size_t active, leaves, tiles, cells_total, cells_built, critical, pairs, truncated;
+  size_t active, leaves, tiles, cells_total, cells_built, critical, pairs, truncated, band_cells;
   double build_s, wall_s, cpu_s, rss_before_mb, rss_peak_mb, wall_t_s, cpu_t_s;
+  double ratio, grad_s, morse_s, pairs_s;   /* gradient path: reduction ratio and phase walls */
+  int with_full, full_same;                 /* full-reduction path in the same run */
+  double full_wall_s, full_cpu_s;
+  size_t full_cells;
   size_t pairs_t;
   double gudhi_s, gudhi_rss_mb;
   long gudhi_pairs;
@@ -174,7 +178,15 @@ static void run_gudhi(const scene *s, result *r) {
   remove(path);
 }
 
-static void child_run(const scene *s, int with_t, int with_gudhi, result *r) {
+static int same_diagram(const mgs_diagram *a, const mgs_diagram *b) {
+  if (a->n != b->n) return 0;
+  for (size_t i = 0; i < a->n; i++) /* both sorted by mgs_diagram_sort */
+    if (a->pairs[i].dim != b->pairs[i].dim || a->pairs[i].birth != b->pairs[i].birth || a->pairs[i].death != b->pairs[i].death)
+      return 0;
+  return 1;
+}
+
+static void child_run(const scene *s, int with_t, int with_gudhi, int with_full, result *r) {
   mgs_error err = {0};
   mgs_topo_sparse *sp = NULL;
   double t0 = mgs_now();
@@ -198,8 +210,28 @@ static void child_run(const scene *s, int with_t, int with_gudhi, result *r) {
   r->cells_total = st.cells_total;
   r->cells_built = st.cells_built;
   r->critical = st.critical_cells;
+  r->band_cells = st.band_cells;
+  r->ratio = st.reduction_ratio;
+  r->grad_s = st.seconds_build;
+  r->morse_s = st.seconds_morse;
+  r->pairs_s = st.seconds_pairs - st.seconds_morse;
   r->pairs = d->n;
   r->truncated = st.truncated;
+  if (with_full) { /* the full reduction of every band cell: same diagram, the old cost */
+    mgs_topo_opts of = o;
+    of.full_reduction = 1;
+    mgs_diagram *df = NULL;
+    mgs_topo_stats sf;
+    double cf = cpu_seconds(), tf = mgs_now();
+    if (mgs_topo_persistence_sparse(sp, &of, &df, &sf, &err) == MGS_OK) {
+      r->with_full = 1;
+      r->full_wall_s = mgs_now() - tf;
+      r->full_cpu_s = cpu_seconds() - cf;
+      r->full_cells = sf.cells_built;
+      r->full_same = same_diagram(d, df);
+      mgs_diagram_destroy(df);
+    }
+  }
   mgs_diagram_destroy(d);
   if (with_t) {
     o.construction = MGS_TOPO_T;
@@ -217,7 +249,7 @@ static void child_run(const scene *s, int with_t, int with_gudhi, result *r) {
   r->ok = 1;
 }
 
-static int run_forked(const scene *s, int with_t, int with_gudhi, result *r) {
+static int run_forked(const scene *s, int with_t, int with_gudhi, int with_full, result *r) {
   memset(r, 0, sizeof *r);
   int fds[2];
   if (pipe(fds) != 0) return 0;
@@ -229,7 +261,7 @@ static int run_forked(const scene *s, int with_t, int with_gudhi, result *r) {
     close(fds[0]);
     result cr;
     memset(&cr, 0, sizeof cr);
-    child_run(s, with_t, with_gudhi, &cr);
+    child_run(s, with_t, with_gudhi, with_full, &cr);
     ssize_t wr = write(fds[1], &cr, sizeof cr);
     (void)wr;
     close(fds[1]);
@@ -246,30 +278,35 @@ static int run_forked(const scene *s, int with_t, int with_gudhi, result *r) {
 
 static void usage(FILE *f) {
   fprintf(f, "usage: morsegs bench topo [--quick] [--min-res N] [--max-res N] [--field torus|noisy|all]\n"
-             "                          [--gudhi-max N] [--no-t]\n"
+             "                          [--gudhi-max N] [--no-t] [--full-max N]\n"
              "  Narrow-band persistence (V construction, band half-width 3 voxels) of a torus SDF\n"
              "  and a noisy scene with 50 floaters at effective 128^3 .. N^3 (default N = 512;\n"
              "  1024 allowed), beside GUDHI 3.7 dense cubical persistence (T construction, python3-gudhi)\n"
              "  on the same clamped field up to --gudhi-max (default 128; 0 = never). Our T\n"
              "  construction is timed too (--no-t skips it) for a like-for-like ratio.\n"
+             "  --full-max N: up to N (default 512; 0 = never) also run the full reduction of every\n"
+             "  band cell (no discrete gradient, the reference path) after the V run, in the same\n"
+             "  process, and check that both diagrams are equal.\n"
              "  --quick: 64^3 and 128^3 only.\n");
 }
 
 int mgs_bench_topo(int argc, char **argv) {
-  int quick = 0, max_res = 512, min_res = 128, gudhi_max = 128, with_t = 1, only = -1;
+  int quick = 0, max_res = 512, min_res = 128, gudhi_max = 128, with_t = 1, only = -1, full_max = 512;
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"max-res", required_argument, 0, 'm'},
                                            {"gudhi-max", required_argument, 0, 'g'}, {"no-t", no_argument, 0, 't'},
                                            {"min-res", required_argument, 0, 'n'}, {"field", required_argument, 0, 'f'},
+                                           {"full-max", required_argument, 0, 'F'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   int c;
   optind = 1;
-  while ((c = getopt_long(argc, argv, "qm:g:thn:f:", longopts, NULL)) != -1) {
+  while ((c = getopt_long(argc, argv, "qm:g:thn:f:F:", longopts, NULL)) != -1) {
     switch (c) {
     case 'q': quick = 1; break;
     case 'm': max_res = atoi(optarg); break;
     case 'g': gudhi_max = atoi(optarg); break;
     case 't': with_t = 0; break;
     case 'n': min_res = atoi(optarg); break;
+    case 'F': full_max = atoi(optarg); break;
     case 'f':
       if (!strcmp(optarg, "torus")) only = F_TORUS;
       else if (!strcmp(optarg, "noisy")) only = F_NOISY;
@@ -287,9 +324,10 @@ int mgs_bench_topo(int argc, char **argv) {
   }
   int sizes[8], ns = 0;
   for (int n = quick ? 64 : min_res; n <= (quick ? 128 : max_res); n *= 2) sizes[ns++] = n;
-  printf("| field | N | active voxels | leaves / tiles | cells built (of full) | critical | pairs (truncated) |"
-         " ours V wall s | ours V CPU s | peak RSS MB (before) | B / active voxel | ours T wall / CPU s | GUDHI T CPU s | GUDHI RSS MB | GUDHI CPU / ours T CPU |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("| field | N | active voxels | leaves / tiles | band cells (full box) | critical (reduction) | pairs (truncated) |"
+         " ours V wall s | ours V CPU s | wall s: enumerate+gradient / Morse boundaries / sort+pairs | peak RSS MB (before) | B / active voxel |"
+         " full reduction wall / CPU s (same diagram) | ours T wall / CPU s | GUDHI T CPU s | GUDHI RSS MB | GUDHI CPU / ours T CPU |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   fflush(stdout);
   int failures = 0;
   for (int kind = 0; kind < 2; kind++)
@@ -299,12 +337,17 @@ int mgs_bench_topo(int argc, char **argv) {
       scene_init(&s, kind, sizes[i]);
       result r;
       int g = gudhi_max > 0 && sizes[i] <= gudhi_max;
-      if (!run_forked(&s, with_t, g, &r)) {
+      int fu = full_max > 0 && sizes[i] <= full_max;
+      if (!run_forked(&s, with_t, g, fu, &r)) {
         printf("| %s | %d | failed: %s |\n", field_names[kind], sizes[i], r.msg);
         failures++;
         continue;
       }
-      char gs[64] = "—", grss[32] = "—", ratio[32] = "—", ts[32] = "—";
+      char gs[64] = "—", grss[32] = "—", ratio[32] = "—", ts[32] = "—", fs[64] = "—";
+      if (r.with_full) {
+        snprintf(fs, sizeof fs, "%.3f / %.3f (%s)", r.full_wall_s, r.full_cpu_s, r.full_same ? "yes" : "NO");
+        if (!r.full_same) failures++;
+      }
       if (with_t) snprintf(ts, sizeof ts, "%.3f / %.3f", r.wall_t_s, r.cpu_t_s);
       if (g && r.gudhi_s >= 0) {
         snprintf(gs, sizeof gs, "%.2f (%ld pairs vs our T %zu)", r.gudhi_s, r.gudhi_pairs, r.pairs_t);
@@ -312,9 +355,10 @@ int mgs_bench_topo(int argc, char **argv) {
         if (with_t && r.cpu_t_s > 0) snprintf(ratio, sizeof ratio, "%.0fx", r.gudhi_s / r.cpu_t_s);
       } else if (g) snprintf(gs, sizeof gs, "failed");
       double bpv = r.active ? (r.rss_peak_mb - r.rss_before_mb) * 1048576.0 / (double)r.active : 0;
-      printf("| %s | %d | %zu | %zu / %zu | %zu (%zu) | %zu | %zu (%zu) | %.3f | %.3f | %.0f (%.0f) | %.0f | %s | %s | %s | %s |\n",
-             field_names[kind], sizes[i], r.active, r.leaves, r.tiles, r.cells_built, r.cells_total, r.critical, r.pairs,
-             r.truncated, r.wall_s, r.cpu_s, r.rss_peak_mb, r.rss_before_mb, bpv, ts, gs, grss, ratio);
+      printf("| %s | %d | %zu | %zu / %zu | %zu (%zu) | %zu (%.2f %%) | %zu (%zu) | %.3f | %.3f | %.3f / %.3f / %.3f | %.0f (%.0f) | %.0f | %s | %s | %s | %s | %s |\n",
+             field_names[kind], sizes[i], r.active, r.leaves, r.tiles, r.band_cells, r.cells_total, r.critical, 100 * r.ratio,
+             r.pairs, r.truncated, r.wall_s, r.cpu_s, r.grad_s, r.morse_s, r.pairs_s, r.rss_peak_mb, r.rss_before_mb, bpv, fs,
+             ts, gs, grss, ratio);
       fflush(stdout);
     }
   printf("\nV = voxels as vertices (default); T = voxels as cubes (GUDHI's construction). Wall = 2 threads.\n"

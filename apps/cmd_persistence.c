@@ -51,7 +51,7 @@ static void usage(FILE *f) {
           "                             0.5 for superlevel)\n"
           "  --no-check                 skip the narrow-band validity check of level sets\n"
           "                             (finite, |value| <= background, inactive tiles = +-background,\n"
-          "                             at most 2 voxel sizes of change across a voxel face)\n"
+          "                             at most 3 voxel sizes of change across a voxel face)\n"
           "  --force                    overwrite existing outputs\n"
           "outputs: diagram.txt diagram.json diagram.png diagram.svg barcode.png barcode.svg\n"
           "         betti.txt critical.vdb\n");
@@ -323,13 +323,13 @@ int mgs_cmd_persistence(int argc, char **argv) {
            "{\"tool\":\"morsegs persistence\",\"source\":\"%s\",\"grid\":\"%s\",\"grid_class\":\"%s\","
            "\"filtration\":\"%s\",\"construction\":\"%s\",\"voxel_size\":%.17g,\"background\":%.17g,"
            "\"clamp\":%s,\"min_persistence\":%.17g,\"level\":%.17g,\"betti\":[%d,%d,%d],"
-           "\"active_voxels\":%zu,\"leaves\":%zu,\"tiles\":%zu,\"cells_total\":%zu,\"cells_built\":%zu,"
+           "\"active_voxels\":%zu,\"leaves\":%zu,\"tiles\":%zu,\"cells_total\":%zu,\"band_cells\":%zu,\"cells_built\":%zu,"
            "\"critical_cells\":%zu,\"reduction_ratio\":%.6f,\"truncated\":%zu,\"engine_seconds\":%.6f}",
            esc_in, esc_grid, class_name(cls), superlevel ? "superlevel (sublevel of -f, negated back)" : "sublevel",
            construction == MGS_TOPO_V ? "V" : "T", h, bg,
            clamp,
            min_pers, level, betti[0], betti[1], betti[2], active, stats.leaves, stats.tiles, stats.cells_total,
-           stats.cells_built, stats.critical_cells, stats.reduction_ratio, stats.truncated, stats.seconds);
+           stats.band_cells, stats.cells_built, stats.critical_cells, stats.reduction_ratio, stats.truncated, stats.seconds);
   free(esc_in);
   meta_json = mgs_strdup(meta);
 
@@ -363,8 +363,8 @@ int mgs_cmd_persistence(int argc, char **argv) {
   printf("  pairs: H0 %zu, H1 %zu, H2 %zu (essential %zu, truncated by the band %zu)\n", per_dim[0], per_dim[1],
          per_dim[2], ess, trunc);
   printf("  Betti numbers at %s %g: b0=%d b1=%d b2=%d\n", superlevel ? "density >=" : "t =", level, betti[0], betti[1], betti[2]);
-  printf("  cells: %zu built of %zu, %zu critical (reduction %.1f %%)\n", stats.cells_built, stats.cells_total,
-         stats.critical_cells, 100.0 * stats.reduction_ratio);
+  printf("  cells: %zu in the band (%zu in the box), %zu critical after the discrete gradient (reduction %.1f %%)\n",
+         stats.band_cells, stats.cells_total, stats.critical_cells, 100.0 * stats.reduction_ratio);
   printf("  time: %.3f s (persistence %.3f s)\n", mgs_now() - t0, stats.seconds);
   printf("  wrote %s/{diagram.txt,diagram.json,diagram.png,diagram.svg,barcode.png,barcode.svg,betti.txt,critical.vdb}\n", outdir);
   rc = 0;

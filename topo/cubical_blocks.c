@@ -3,30 +3,15 @@
  * background. The narrow-band path builds only the cells near leaves: the cells whose
  * anchor voxel lies within one voxel of a leaf, each claimed by exactly one leaf; constant
  * regions contribute no cells of their own (+w is never built; -w collapses along x to the
- * run ends next to the band, see topo/persistence.c). */
+ * run ends next to the band, see topo/persistence.c). With the discrete gradient (default)
+ * each leaf emits only the critical cells of the lower stars of its voxels plus the -w run
+ * ends it owns (topo/sparse_gradient.c), and the Morse boundary walk skips -w tiles block by
+ * block. Shared internals: topo/sparse_internal.h. */
 #include <stdlib.h>
 #include <string.h>
 #include "core/mgs_log.h"
 #include "core/mgs_parallel.h"
-#include "topo/cubical_internal.h"
-
-enum { BLK_LEAF = 0, BLK_TILE = 1 };
-
-struct mgs_topo_sparse {
-  float background;
-  size_t n, cap;
-  int32_t *origin;   /* 3 per block */
-  uint8_t *type;
-  float *cval;       /* tile value */
-  size_t *leaf_at;   /* leaf: offset of its 512 values in vals */
-  float *vals;
-  size_t nvals, capvals;
-  size_t nleaves, ntiles_in;
-  cub_map map;       /* block key -> block index (rebuilt when it fills) */
-  size_t map_cap;
-};
-
-static uint64_t block_key(int32_t bx, int32_t by, int32_t bz) { return cub_key(bx, by, bz); }
+#include "topo/sparse_internal.h"
 
 mgs_status mgs_topo_sparse_create(float background, mgs_topo_sparse **out, mgs_error *err) {
   if (!out) return mgs_error_set(err, MGS_ERR_ARG, "sparse field: null argument");
@@ -163,25 +148,7 @@ mgs_status mgs_topo_sparse_from_dense(const float *values, int nx, int ny, int n
   return MGS_OK;
 }
 
-/* ---------------------------------------------------------------- prepared view */
-/* Clamped, sign-applied blocks. Tiles whose clamped value lies strictly between the bottom
- * and the top are expanded into leaves (they hold cells of their own). */
-typedef struct prep {
-  const mgs_topo_sparse *s;
-  float lo, top, sign;
-  float *vals;       /* 512 per block that acts as a leaf, else NULL */
-  size_t *leaf_slot; /* block -> slot in vals (SIZE_MAX for constant blocks) */
-  float *cval;       /* clamped constant per block */
-  size_t nleaf;
-  size_t *leaves;    /* block indices acting as leaves */
-} prep;
-
-static inline float clampf(const prep *p, float v) {
-  v *= p->sign;
-  return (v < p->lo ? p->lo : (v > p->top ? p->top : v)) + 0.0f;
-}
-
-static float sparse_voxel(const void *ctx, int32_t x, int32_t y, int32_t z) {
+float cub_sparse_voxel(const void *ctx, int32_t x, int32_t y, int32_t z) {
   const prep *p = ctx;
   uint32_t b = cub_map_get(&p->s->map, block_key(x >> 3, y >> 3, z >> 3));
   if (b == UINT32_MAX) return p->top;
@@ -189,37 +156,8 @@ static float sparse_voxel(const void *ctx, int32_t x, int32_t y, int32_t z) {
   return p->vals[p->leaf_slot[b] * 512 + (size_t)(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
 }
 
-/* Local window of a leaf: x in [-2, 9], y, z in [-1, 9] relative to its origin. */
-#define WX 12
-#define WY 11
-#define WZ 11
-static inline float win(const float *w, int x, int y, int z) { return w[((x + 2) * WY + (y + 1)) * WZ + (z + 1)]; }
-
-static inline int axis_set(int cons, int32_t a, int32_t v[2]) {
-  if (cons == MGS_TOPO_V) {
-    if (!(a & 1)) { v[0] = a >> 1; return 1; }
-    v[0] = (a - 1) >> 1; v[1] = (a + 1) >> 1; return 2;
-  }
-  if (a & 1) { v[0] = (a - 1) >> 1; return 1; }
-  v[0] = (a >> 1) - 1; v[1] = a >> 1; return 2;
-}
-
-/* value of the cell with doubled coordinates (a,b,c) relative to the leaf origin */
-static inline float wcell(int cons, const float *w, int32_t a, int32_t b, int32_t c) {
-  int32_t xs[2], ys[2], zs[2];
-  int nx = axis_set(cons, a, xs), ny = axis_set(cons, b, ys), nz = axis_set(cons, c, zs);
-  float m = win(w, xs[0], ys[0], zs[0]);
-  for (int i = 0; i < nx; i++)
-    for (int j = 0; j < ny; j++)
-      for (int k = 0; k < nz; k++) {
-        float v = win(w, xs[i], ys[j], zs[k]);
-        if (cons == MGS_TOPO_V ? v > m : v < m) m = v;
-      }
-  return m;
-}
-
 /* Which of the 27 neighbour offsets (dx,dy,dz in -1..1; bit (dx+1)*9+(dy+1)*3+dz+1) hold a leaf. */
-static uint32_t leaf_neighbours(const prep *p, size_t b) {
+uint32_t cub_sparse_leaf_neighbours(const prep *p, size_t b) {
   const int32_t *o = p->s->origin + 3 * b;
   uint32_t mask = 0;
   for (int dx = -1; dx <= 1; dx++)
@@ -241,7 +179,7 @@ static inline int cand(int i, int d[2]) {
 
 /* A cell anchored at relative voxel (i,j,k) belongs to this leaf unless a lexicographically
  * smaller neighbour leaf also covers it. */
-static int owns(uint32_t mask, int i, int j, int k) {
+int cub_sparse_owns(uint32_t mask, int i, int j, int k) {
   int dx[2], dy[2], dz[2];
   int nx = cand(i, dx), ny = cand(j, dy), nz = cand(k, dz);
   for (int a = 0; a < nx; a++)
@@ -252,6 +190,31 @@ static int owns(uint32_t mask, int i, int j, int k) {
         if (neg && (mask >> ((x + 1) * 9 + (y + 1) * 3 + z + 1) & 1u)) return 0;
       }
   return 1;
+}
+
+/* The window from the 27 neighbour blocks (one block lookup each, not one per voxel). */
+void cub_sparse_load_window(const prep *p, size_t b, float *w) {
+  const int32_t *o = p->s->origin + 3 * b;
+  const float *vals[27];
+  float cval[27];
+  for (int d = 0; d < 27; d++) {
+    uint32_t nb = cub_map_get(&p->s->map, block_key((o[0] >> 3) + d / 9 - 1, (o[1] >> 3) + d / 3 % 3 - 1, (o[2] >> 3) + d % 3 - 1));
+    vals[d] = NULL;
+    if (nb == UINT32_MAX) cval[d] = p->top;
+    else if (p->leaf_slot[nb] == SIZE_MAX) cval[d] = p->cval[nb];
+    else vals[d] = p->vals + p->leaf_slot[nb] * 512;
+  }
+  for (int x = -2; x <= 9; x++) {
+    int bx = x < 0 ? 0 : (x < 8 ? 1 : 2), lx = x & 7;
+    for (int y = -1; y <= 9; y++) {
+      int by = y < 0 ? 0 : (y < 8 ? 1 : 2), ly = y & 7;
+      float *row = w + ((x + 2) * WY + (y + 1)) * WZ;
+      for (int z = -1; z <= 9; z++) {
+        int bz = z < 0 ? 0 : (z < 8 ? 1 : 2), d = bx * 9 + by * 3 + bz;
+        row[z + 1] = vals[d] ? vals[d][(lx << 6) | (ly << 3) | (z & 7)] : cval[d];
+      }
+    }
+  }
 }
 
 /* Two passes over the leaves (count, then fill at per-leaf offsets): one exact array. */
@@ -273,21 +236,13 @@ static void enum_leaves(void *vctx, size_t b0, size_t b1) {
     cub_cell *out = e->dst ? e->dst + e->offset[li] : NULL;
     size_t b = p->leaves[li];
     const int32_t *o = p->s->origin + 3 * b;
-    const float *own = p->vals + p->leaf_slot[b] * 512;
-    for (int x = -2; x <= 9; x++)
-      for (int y = -1; y <= 9; y++)
-        for (int z = -1; z <= 9; z++) {
-          float v;
-          if (x >= 0 && x < 8 && y >= 0 && y < 8 && z >= 0 && z < 8) v = own[(x << 6) | (y << 3) | z];
-          else v = sparse_voxel(p, o[0] + x, o[1] + y, o[2] + z);
-          w[((x + 2) * WY + (y + 1)) * WZ + (z + 1)] = v;
-        }
-    uint32_t mask = leaf_neighbours(p, b);
+    cub_sparse_load_window(p, b, w);
+    uint32_t mask = cub_sparse_leaf_neighbours(p, b);
     int base = cons == MGS_TOPO_V ? 0 : 1; /* doubled coordinate of anchor u: 2u + base */
     for (int i = -1; i <= 8; i++)
       for (int j = -1; j <= 8; j++)
         for (int k = -1; k <= 8; k++) {
-          if ((i <= 0 || i >= 7 || j <= 0 || j >= 7 || k <= 0 || k >= 7) && !owns(mask, i, j, k)) continue;
+          if ((i <= 0 || i >= 7 || j <= 0 || j >= 7 || k <= 0 || k >= 7) && !cub_sparse_owns(mask, i, j, k)) continue;
           for (int ex = 0; ex <= 1; ex++)
             for (int ey = 0; ey <= 1; ey++)
               for (int ez = 0; ez <= 1; ez++) {
@@ -334,7 +289,7 @@ mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs
   mgs_topo_stats stats;
   memset(&stats, 0, sizeof stats);
   stats.effective_w = w;
-  cub_field f = {sparse_voxel, &p, p.lo, p.top, (int)opts.construction};
+  cub_field f = {cub_sparse_voxel, &p, p.lo, p.top, (int)opts.construction, NULL};
   cub_cells cells = {0};
   size_t *counts = NULL;
   p.leaf_slot = malloc((s->n + 1) * sizeof *p.leaf_slot);
@@ -390,6 +345,13 @@ mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs
     stats.cells_total = 1;
     for (int k = 0; k < 3; k++) stats.cells_total *= (size_t)(2 * (hi3[k] - lo3[k]) + ext);
   }
+  int gradient = !opts.full_reduction;
+  size_t band = 0;
+  p.construction = (int)opts.construction;
+  if (gradient) {
+    if ((st = cub_sparse_gradient_cells(&p, &f, &cells, &band, err)) != MGS_OK) goto done;
+    goto enumerated;
+  }
   counts = malloc((p.nleaf + 1) * sizeof *counts);
   if (!counts) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory"); goto done; }
   enum_ctx ec = {&p, &f, counts, counts, NULL};
@@ -402,11 +364,12 @@ mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs
   cells.n = total;
   ec.dst = cells.c;
   mgs_parallel_for(0, p.nleaf, 16, enum_leaves, &ec);
+enumerated:
   stats.seconds_build = mgs_now() - t0;
   stats.peak_bytes = nslots * 512 * sizeof(float) + s->n * 24;
   {
     double vs = opts.voxel_size;
-    cub_run run = {&f, &opts, vs, {opts.origin[0], opts.origin[1], opts.origin[2]}, 0};
+    cub_run run = {&f, &opts, vs, {opts.origin[0], opts.origin[1], opts.origin[2]}, 0, gradient, band};
     st = cub_persistence(&run, &cells, out, &stats, err);
   }
 done:

@@ -129,7 +129,7 @@ static uint32_t resolve_face(const cub_complex *cx, int32_t a, int32_t b, int32_
     return UINT32_MAX;
   }
   if (a & 1) { *skip = 1; return UINT32_MAX; }
-  while (cub_cell_value(f, a - 1, b, c) == f->lo) a -= 2;
+  a = cub_lo_run_start(f, a, b, c);
   uint32_t r = cub_rank_get(cx, cub_key(a, b, c));
   if (r == UINT32_MAX)
     mgs_error_set(err, MGS_ERR_FORMAT, "persistence: interior region reaches voxel x=%d (cell %d,%d,%d) "
@@ -137,7 +137,21 @@ static uint32_t resolve_face(const cub_complex *cx, int32_t a, int32_t b, int32_
   return r;
 }
 
-int cub_boundary(const cub_complex *cx, uint32_t rank, uint32_t out[6], mgs_error *err) {
+int32_t cub_lo_run_start(const cub_field *f, int32_t a, int32_t b, int32_t c) {
+  for (;;) {
+    if (f->lo_skip) a = f->lo_skip(f->ctx, a, b, c);
+    if (cub_cell_value(f, a - 1, b, c) != f->lo) return a;
+    a -= 2;
+  }
+}
+
+int cub_boundary(const cub_complex *cx, uint32_t rank, uint32_t out[6], const uint32_t **outp,
+                 mgs_error *err) {
+  if (cx->bstart) {
+    *outp = cx->bpool + cx->bstart[rank];
+    return (int)(cx->bstart[rank + 1] - cx->bstart[rank]);
+  }
+  *outp = out;
   int32_t p[3];
   cub_unkey(cx->cells[rank].key, &p[0], &p[1], &p[2]);
   int n = 0;

@@ -38,6 +38,10 @@ typedef struct cub_field {
   float lo;   /* bottom clamp: cells of exactly this value are collapsed along x */
   float top;  /* cells with value >= top are not built (they enter last, all at once) */
   int construction; /* MGS_TOPO_V / MGS_TOPO_T */
+  /* optional: given an even-x cell (a,b,c) of value lo, a smaller even a' such that every
+   * cell (a'' ,b,c), a' <= a'' <= a, has value lo (e.g. the left edge of a -w tile); NULL:
+   * walk voxel by voxel */
+  int32_t (*lo_skip)(const void *ctx, int32_t a, int32_t b, int32_t c);
 } cub_field;
 
 /* A cell's filtration value (V: max of vertices; T: min of adjacent voxels). */
@@ -49,13 +53,37 @@ static inline int cub_keep(const cub_field *f, float v, int32_t a, int32_t b, in
   /* v == lo: keep only the left end of each x-run of lo cells (even a, left coface not lo) */
   return !(a & 1) && cub_cell_value(f, a - 1, b, c) != f->lo;
 }
+/* Left end of the x-run of lo cells holding the even-x lo cell (a,b,c): its a coordinate. */
+int32_t cub_lo_run_start(const cub_field *f, int32_t a, int32_t b, int32_t c);
 /* The voxel whose value sets the cell's value (V: max (value, index) vertex; T: min adjacent). */
 void cub_cell_voxel(const cub_field *f, int32_t a, int32_t b, int32_t c, int32_t vox[3]);
+
+/* ---------------------------------------------------------------- discrete gradient
+ * ProcessLowerStars on one vertex (topo/gradient_lowerstar.c; T: on -f, read dually). Star
+ * cells of vertex v are indexed ci = (dx+1)*9 + (dy+1)*3 + dz+1 (cell 2v + d in the doubled
+ * grid; 13 = v). */
+enum { CUB_LS_OUT = 0, CUB_LS_FREE = 1, CUB_LS_CRIT = 2, CUB_LS_PAIR = 3 };
+typedef struct cub_ls {
+  uint8_t state[27];   /* CUB_LS_OUT: not in the lower star */
+  int8_t partner[27];  /* CUB_LS_PAIR: the star index of the other cell */
+  uint8_t time[27];    /* classification order inside the lower star */
+  uint8_t n;           /* cells in the lower star */
+} cub_ls;
+void cub_lower_star_tables(void); /* once, before any cub_lower_star call */
+/* nb: the 27 clamped values around v (missing voxels +INFINITY), nb[13] = f(v). */
+void cub_lower_star(const float nb[27], cub_ls *ls);
+int cub_ls_dim(int ci);
+/* Cheap pre-check: *ncells = |L(v)|; returns 0 when L(v) has no critical cell (a regular
+ * vertex: its lower link is acyclic), 1 when cub_lower_star must run to find them. */
+int cub_lower_star_count(const float nb[27], size_t *ncells);
 
 /* Growable array of (key, value) cells: 12 bytes a cell (the dimension is in the key). */
 typedef struct __attribute__((packed, aligned(4))) cub_cell { uint64_t key; float v; } cub_cell;
 typedef struct cub_cells { cub_cell *c; size_t n, cap; } cub_cells;
 mgs_status cub_cells_push(cub_cells *l, uint64_t key, float v, mgs_error *err);
+/* The critical cells of L(v) (vertex (x,y,z) of value v) into out (may be NULL); the count.
+ * base 0: V (cell 2v + d); base 1: T, the dual cells 2v + 1 + d. */
+size_t cub_ls_critical(const cub_ls *ls, int32_t x, int32_t y, int32_t z, int base, float v, cub_cell *out);
 void cub_cells_free(cub_cells *l);
 
 /* Open-addressing map key -> rank (key and value side by side: one cache line per probe). */
@@ -86,6 +114,9 @@ typedef struct cub_complex {
   uint32_t *slot;    /* open addressing, UINT32_MAX = empty */
   size_t mask;
   size_t n_dim[4];
+  /* Morse complex (gradient path): boundaries by rank as CSR, NULL for the plain complex */
+  uint64_t *bstart;
+  uint32_t *bpool;
 } cub_complex;
 
 static inline uint32_t cub_rank_get(const cub_complex *cx, uint64_t key) {
@@ -98,8 +129,13 @@ static inline uint32_t cub_rank_get(const cub_complex *cx, uint64_t key) {
 }
 
 /* Boundary of cell `rank` in the reduced (Morse) complex, as ascending ranks with Z/2
- * cancellation; returns the count (<= 6) or -1 with err set (inconsistent band). */
-int cub_boundary(const cub_complex *cx, uint32_t rank, uint32_t out[6], mgs_error *err);
+ * cancellation: *out points at scratch (plain complex, <= 6 entries) or at the stored Morse
+ * boundary. Returns the count or -1 with err set (inconsistent band). */
+int cub_boundary(const cub_complex *cx, uint32_t rank, uint32_t scratch[6], const uint32_t **out,
+                 mgs_error *err);
+/* Morse boundaries of every cell of cx (its cells are the critical cells of the gradient),
+ * by V-path traversal in parallel (topo/morse_boundary.c): fills bstart/bpool. */
+mgs_status cub_morse_boundaries(cub_complex *cx, mgs_error *err);
 
 /* Pair records: dim, birth rank, death rank (UINT32_MAX for essential). */
 typedef struct cub_pair { uint32_t dim, birth, death; } cub_pair;
@@ -123,6 +159,8 @@ typedef struct cub_run {
   const mgs_topo_opts *opts;
   double voxel_size, origin[3];
   int negate_output; /* unused: values are reported in filtration units */
+  int gradient;      /* cells are the critical cells of the gradient: Morse boundaries */
+  size_t band_cells; /* gradient path: cells below top in the band (what the plain path builds) */
 } cub_run;
 mgs_status cub_persistence(const cub_run *run, cub_cells *cells, mgs_diagram **out,
                            mgs_topo_stats *stats, mgs_error *err);

@@ -18,10 +18,15 @@
  *   - cells at the bottom value (-w, interior tiles) are collapsed by an x-directed
  *     acyclic matching in closed form: only the left ends of x-runs of -w cells are kept.
  * Pairs whose death is +w or whose birth is -w were set by the clamp: truncated = 1.
+ * Discrete gradient first: ProcessLowerStars (Robins-Wood-Sheppard) per voxel, per leaf in
+ * parallel (topo/gradient_lowerstar.c; T through duality, the lower stars of -f), pairs cells
+ * of equal value; only the critical cells (1-3 % of the band cells on SDF bands) are sorted,
+ * and their boundaries are those of the Morse complex (V-path traversal in parallel,
+ * topo/morse_boundary.c). The diagram equals the full reduction's exactly (values, cells
+ * and voxels on generic fields); opts.full_reduction = 1 keeps that reference path.
  * Pairing: union-find for dimension 0, twist reduction of the 3-cell columns for
  * dimension 2, reduction with clearing + compression for dimension 1 (topo/pairs_*.c).
- * Cost: about 8 cells per band voxel, each sorted, indexed and reduced (no discrete
- * gradient yet; see bench/RESULTS-topo.md). Memory about 300 bytes per leaf voxel.
+ * Memory about 20-50 bytes per active voxel at 256^3-1024^3 (bench/RESULTS-topo.md).
  * Coordinates: |voxel index| < 2^19; at most 2^31 cells.
  *
  * Dense layout: values[(x*ny + y)*nz + z] (same as the VDB leaf order (x<<6)|(y<<3)|z),
@@ -58,6 +63,8 @@ typedef struct mgs_topo_opts {
   double min_persistence; /* report pairs with death - birth > this (0: all positive) */
   double voxel_size;      /* world = origin + voxel_size * ijk (dense path; VDB: grid's) */
   double origin[3];
+  int full_reduction;     /* 1: skip the discrete gradient and reduce every band cell (the
+                             reference path, for tests and benchmarks); 0 (default): gradient */
 } mgs_topo_opts;
 
 void mgs_topo_opts_default(mgs_topo_opts *o); /* V, sublevel, w = inf, 0, 1, (0,0,0) */
@@ -66,16 +73,20 @@ typedef struct mgs_topo_stats {
   size_t active_voxels;   /* voxels the engine looked at (dense: all; sparse: leaf voxels) */
   size_t leaves, tiles;   /* sparse input blocks */
   size_t cells_total;     /* cells of the full complex on the bounding box (implicit) */
-  size_t cells_built;     /* cells kept after dropping +w cells and collapsing -w cells:
-                             the cells the pairing stages actually touch */
-  size_t critical_cells;  /* cells in positive-persistence pairs or essential classes, i.e.
-                             what an optimal discrete gradient would leave critical. NOTE: no
-                             discrete gradient is built yet; all cells_built are reduced. */
-  double reduction_ratio; /* 1 - critical_cells / cells_total */
+  size_t band_cells;      /* cells of the band below the top value (+w), -w cells collapsed
+                             along x: what the full-reduction path sorts and reduces */
+  size_t cells_built;     /* cells the sort and the pairing stages touch: the critical cells
+                             of the discrete gradient, or band_cells (full_reduction) */
+  size_t critical_cells;  /* critical cells of the discrete gradient (= cells_built) */
+  double reduction_ratio; /* 1 - critical_cells / band_cells (0 without a gradient) */
+  size_t persistent_cells; /* cells in positive-persistence pairs or essential classes (what an
+                              optimal gradient would leave) */
   size_t pairs_d[3];      /* reported pairs per dimension (incl. essential) */
   size_t truncated;       /* reported pairs set by the clamp */
   double effective_w;     /* clamp actually used */
-  double seconds_build, seconds_pairs, seconds;
+  double seconds_build;   /* input, cell enumeration and the gradient */
+  double seconds_morse;   /* Morse boundaries (V-path traversal) */
+  double seconds_pairs, seconds;
   size_t peak_bytes;      /* engine's own largest allocation footprint (estimate) */
 } mgs_topo_stats;
 

@@ -20,8 +20,9 @@ mgs_status cub_pairs_d0(const cub_complex *cx, uint8_t *flags, cub_pairs *out, m
   mgs_status st = MGS_OK;
   for (size_t r = 0; r < cx->n; r++) {
     if (cub_key_dim(cx->cells[r].key) != 1) continue;
-    uint32_t bd[6];
-    int nb = cub_boundary(cx, (uint32_t)r, bd, err);
+    uint32_t sc[6];
+    const uint32_t *bd;
+    int nb = cub_boundary(cx, (uint32_t)r, sc, &bd, err);
     if (nb < 0) { st = err ? err->code : MGS_ERR_FORMAT; break; }
     if (nb != 2) continue; /* a loop edge after collapse: positive */
     uint32_t u = find(parent, bd[0]), v = find(parent, bd[1]);

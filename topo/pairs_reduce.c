@@ -61,18 +61,26 @@ static mgs_status reduce(const cub_complex *cx, int dim, uint8_t *flags, uint8_t
   mgs_status st = MGS_OK;
   uint32_t *piv = malloc(cx->n * sizeof *piv);
   col_store s = {0};
-  size_t wcap = 64;
-  uint32_t *w = malloc(wcap * sizeof *w), *t = malloc(wcap * sizeof *t);
-  if (!piv || !w || !t) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (reduction)"); goto done; }
+  size_t wcap = 64, obcap = 64;
+  uint32_t *w = malloc(wcap * sizeof *w), *t = malloc(wcap * sizeof *t), *ob = malloc(obcap * sizeof *ob);
+  if (!piv || !w || !t || !ob) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (reduction)"); goto done; }
   memset(piv, 0xff, cx->n * sizeof *piv);
   if (cx->n >= SELF) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: %zu cells exceed the 2^31 limit", cx->n); goto done; }
   for (size_t r = 0; r < cx->n; r++) {
     if ((flags[r] & skip_col) || cub_key_dim(cx->cells[r].key) != dim) continue;
-    uint32_t bd[6];
-    int nb = cub_boundary(cx, (uint32_t)r, bd, err);
+    uint32_t sc[6];
+    const uint32_t *bd;
+    int nb = cub_boundary(cx, (uint32_t)r, sc, &bd, err);
     if (nb < 0) { st = err ? err->code : MGS_ERR_FORMAT; goto done; }
     size_t n = 0;
     int xored = 0;
+    if ((size_t)nb > wcap) {
+      while (wcap < (size_t)nb) wcap *= 2;
+      uint32_t *nw = realloc(w, wcap * sizeof *w), *nt = nw ? realloc(t, wcap * sizeof *t) : NULL;
+      if (nw) w = nw;
+      if (!nw || !nt) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (column)"); goto done; }
+      t = nt;
+    }
     for (int i = 0; i < nb; i++)
       if (!(flags[bd[i]] & drop_row)) w[n++] = bd[i];
     while (n > 0) {
@@ -91,10 +99,15 @@ static mgs_status reduce(const cub_complex *cx, int dim, uint8_t *flags, uint8_t
       xored = 1;
       const uint32_t *other;
       uint32_t olen;
-      uint32_t ob[6];
       if (id & SELF) {
-        int k = cub_boundary(cx, id & ~SELF, bd, err);
+        int k = cub_boundary(cx, id & ~SELF, sc, &bd, err);
         if (k < 0) { st = err ? err->code : MGS_ERR_FORMAT; goto done; }
+        if ((size_t)k > obcap) {
+          uint32_t *no = realloc(ob, (size_t)k * 2 * sizeof *ob);
+          if (!no) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (column)"); goto done; }
+          ob = no;
+          obcap = (size_t)k * 2;
+        }
         olen = 0;
         for (int i = 0; i < k; i++)
           if (!(flags[bd[i]] & drop_row)) ob[olen++] = bd[i];
@@ -118,7 +131,7 @@ static mgs_status reduce(const cub_complex *cx, int dim, uint8_t *flags, uint8_t
       if ((st = cub_pairs_push(out, (uint32_t)zero_dim, (uint32_t)r, UINT32_MAX, err)) != MGS_OK) goto done;
   }
 done:
-  free(piv); free(w); free(t);
+  free(piv); free(w); free(t); free(ob);
   free(s.pool); free(s.start); free(s.len);
   return st;
 }

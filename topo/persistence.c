@@ -1,5 +1,11 @@
 /* The persistence pipeline shared by the dense and sparse paths: sort the reduced complex,
- * pair (D0 union-find, D2 then D1 reduction), and turn rank pairs into a diagram.
+ * pair (D0 union-find, D2 then D1 reduction), and turn rank pairs into a diagram. With the
+ * discrete gradient (default) the reduced complex is the Morse complex of the critical cells
+ * (topo/gradient_lowerstar.c, topo/morse_boundary.c): the lower-star matching pairs cells of
+ * equal value only, so every sublevel set is a union of matched pairs and critical cells and
+ * the filtered Morse complex has the same diagram (Mischaikow-Nanda 2013). Critical cells are
+ * still ordered by (value, dim, key), a filtration of the Morse complex since a Morse boundary
+ * holds cells of lower dimension and value <= the cell's.
  *
  * Why the reduced complex gives the box's diagram exactly:
  *  - Top: every cell of value +w (= top) enters at the last filtration value, when the box
@@ -111,6 +117,11 @@ mgs_status cub_persistence(const cub_run *run, cub_cells *cells, mgs_diagram **o
       cx.n_dim[cub_key_dim(cx.cells[i].key)]++;
     }
   }
+  if (run->gradient) {
+    double tm = mgs_now();
+    if ((st = cub_morse_boundaries(&cx, err)) != MGS_OK) goto done;
+    if (stats) stats->seconds_morse = mgs_now() - tm;
+  }
   flags = calloc(cx.n ? cx.n : 1, 1);
   if (!flags) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (flags)"); goto done; }
   if ((st = cub_pairs_d0(&cx, flags, &pairs, err)) != MGS_OK) goto done;
@@ -146,24 +157,30 @@ mgs_status cub_persistence(const cub_run *run, cub_cells *cells, mgs_diagram **o
   }
   mgs_diagram_sort(d);
   d->n_cells = stats ? stats->cells_total : cx.n;
-  /* critical cells: those of positive-persistence pairs and essential classes, i.e. what an
-   * optimal discrete gradient leaves; the rest of the built cells pair at zero persistence */
-  d->n_critical = 0;
+  /* cells of positive-persistence pairs and essential classes: what an optimal discrete
+   * gradient would leave */
+  size_t persistent = 0;
   for (size_t i = 0; i < pairs.n; i++) {
     const cub_pair *p = &pairs.p[i];
-    if (p->death == UINT32_MAX) d->n_critical += 1;
-    else if (cx.cells[p->death].v > cx.cells[p->birth].v) d->n_critical += 2;
+    if (p->death == UINT32_MAX) persistent += 1;
+    else if (cx.cells[p->death].v > cx.cells[p->birth].v) persistent += 2;
   }
   (void)nonzero;
+  /* critical cells after the discrete gradient (the full-reduction path has none: all) */
+  d->n_critical = cx.n;
   d->seconds = mgs_now() - t0;
   if (stats) {
+    size_t band = run->gradient ? run->band_cells : cx.n;
+    stats->band_cells = band;
     stats->cells_built = cx.n;
-    stats->critical_cells = d->n_critical;
-    stats->reduction_ratio = cx.n ? 1.0 - (double)d->n_critical / (double)(stats->cells_total ? stats->cells_total : cx.n) : 0;
+    stats->critical_cells = cx.n;
+    stats->persistent_cells = persistent;
+    stats->reduction_ratio = band ? 1.0 - (double)cx.n / (double)band : 0;
     for (int k = 0; k < 3; k++) stats->pairs_d[k] = per_dim[k];
     stats->truncated = truncated;
     stats->seconds_pairs = d->seconds;
-    size_t bytes = cells->cap * sizeof(cub_cell) + (cx.mask + 1) * sizeof(uint32_t) + cx.n * (1 + 4 + 4);
+    size_t bytes = cells->cap * sizeof(cub_cell) + (cx.mask + 1) * sizeof(uint32_t) + cx.n * (1 + 4 + 4) +
+                   (cx.bstart ? (cx.n + 1) * sizeof(uint64_t) + cx.bstart[cx.n] * sizeof(uint32_t) : 0);
     if (bytes > stats->peak_bytes) stats->peak_bytes = bytes;
     d->n_active_voxels = stats->active_voxels;
   }
@@ -174,6 +191,8 @@ done:
   free(flags);
   free(pairs.p);
   free(cx.slot);
+  free(cx.bstart);
+  free(cx.bpool);
   return st;
 }
 
@@ -223,7 +242,7 @@ mgs_status mgs_topo_persistence_dense_stats(const float *values, int nx, int ny,
     cl[i] = (v < -w ? -w : (v > w ? w : v)) + 0.0f; /* -0 -> +0: one total order */
   }
   dense_ctx dc = {cl, nx, ny, nz};
-  cub_field f = {dense_voxel, &dc, -w, w, (int)opts.construction};
+  cub_field f = {dense_voxel, &dc, -w, w, (int)opts.construction, NULL};
   int ext = opts.construction == MGS_TOPO_V ? -1 : 1; /* doubled extent: 2n-1 (V) or 2n+1 (T) */
   int32_t ea = 2 * nx + ext, eb = 2 * ny + ext, ec = 2 * nz + ext;
   mgs_topo_stats stats;
@@ -232,16 +251,45 @@ mgs_status mgs_topo_persistence_dense_stats(const float *values, int nx, int ny,
   stats.cells_total = (size_t)ea * eb * ec;
   stats.effective_w = opts.half_width;
   cub_cells cells = {0};
+  int gradient = !opts.full_reduction, dual = opts.construction == MGS_TOPO_T;
+  size_t band = 0;
+  if (gradient) {
+    /* critical cells of the lower stars of the voxels strictly inside (lo, top) */
+    cub_lower_star_tables();
+    for (int32_t x = 0; x < nx && st == MGS_OK; x++)
+      for (int32_t y = 0; y < ny && st == MGS_OK; y++)
+        for (int32_t z = 0; z < nz && st == MGS_OK; z++) {
+          float fv = cl[((size_t)x * ny + y) * nz + z];
+          if (!(fv > f.lo && fv < f.top)) continue;
+          float nb[27];
+          for (int i = 0; i < 27; i++) nb[i] = dense_voxel(&dc, x + i / 9 - 1, y + i / 3 % 3 - 1, z + i % 3 - 1);
+          if (dual)
+            for (int i = 0; i < 27; i++) nb[i] = -nb[i]; /* T: lower stars of -f, read dually */
+          size_t nl;
+          if (!cub_lower_star_count(nb, &nl)) { band += nl; continue; } /* regular: no critical cell */
+          cub_ls ls;
+          cub_lower_star(nb, &ls);
+          band += ls.n;
+          cub_cell cc[27];
+          size_t k = cub_ls_critical(&ls, x, y, z, dual, fv, cc);
+          for (size_t i = 0; i < k && st == MGS_OK; i++) st = cub_cells_push(&cells, cc[i].key, cc[i].v, err);
+        }
+  }
   for (int32_t a = 0; a < ea && st == MGS_OK; a++)
     for (int32_t b = 0; b < eb && st == MGS_OK; b++)
       for (int32_t c = 0; c < ec; c++) {
+        /* gradient path: only the -w cells (x-run ends) are added here */
+        if (gradient && !dual && dense_voxel(&dc, a >> 1, b >> 1, c >> 1) != f.lo) continue;
         float v = cub_cell_value(&f, a, b, c);
-        if (cub_keep(&f, v, a, b, c))
+        if (gradient && v != f.lo) continue;
+        if (cub_keep(&f, v, a, b, c)) {
+          band++;
           if ((st = cub_cells_push(&cells, cub_key(a, b, c), v, err)) != MGS_OK) break;
+        }
       }
   stats.seconds_build = mgs_now() - t0;
   stats.peak_bytes = nv * sizeof(float);
-  cub_run run = {&f, &opts, opts.voxel_size, {opts.origin[0], opts.origin[1], opts.origin[2]}, 0};
+  cub_run run = {&f, &opts, opts.voxel_size, {opts.origin[0], opts.origin[1], opts.origin[2]}, 0, gradient, band};
   if (st == MGS_OK) st = cub_persistence(&run, &cells, out, &stats, err);
   cub_cells_free(&cells);
   free(cl);

@@ -141,22 +141,32 @@ static void run_case(row *rw, size_t n, int res, const float *mean, const float 
 }
 
 int mgs_bench_vdb(int argc, char **argv) {
-  static const struct option opts[] = {{"quick", no_argument, 0, 'q'}, {"sweep", no_argument, 0, 's'},
+  static const struct option opts[] = {{"quick", no_argument, 0, 'q'}, {"sweep", no_argument, 0, 's'}, {"sdf-method", required_argument, 0, 'M'},
                                        {"sizes", required_argument, 0, 'n'}, {"res", required_argument, 0, 'r'}, {"refine", required_argument, 0, 'f'},
                                        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0, c, method = MGS_VDB_SDF_MESH, refine = -1;
+  mgs_vdb_sdf_params defaults;
+  mgs_vdb_sdf_params_default(&defaults);
+  int quick = 0, c, method = (int)defaults.method, refine = -1;
   const char *sizes = NULL, *resl = NULL;
   optind = 1;
   while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
     if (c == 'q') quick = 1;
     else if (c == 's') method = MGS_VDB_SDF_SWEEP;
+    else if (c == 'M') {
+      if (!strcmp(optarg, "mesh")) method = MGS_VDB_SDF_MESH;
+      else if (!strcmp(optarg, "sweep")) method = MGS_VDB_SDF_SWEEP;
+      else if (!strcmp(optarg, "closest")) method = MGS_VDB_SDF_CLOSEST;
+      else { fprintf(stderr, "morsegs bench vdb: --sdf-method '%s': expected closest, mesh or sweep\n", optarg); return 2; }
+    }
     else if (c == 'n') sizes = optarg;
     else if (c == 'r') resl = optarg;
     else if (c == 'f') refine = atoi(optarg);
     else if (c == 'h') {
-      printf("usage: morsegs bench vdb [--quick] [--sweep] [--sizes 100000,1000000] [--res 256,512,1024] [--refine 0|1|2]\n"
+      printf("usage: morsegs bench vdb [--quick] [--sdf-method closest|mesh|sweep] [--sweep] [--sizes 100000,1000000]\n"
+             "                         [--res 256,512,1024] [--refine 0|1|2]\n"
              "  α-field + SDF of Gaussians on a torus vs OpenVDB ParticlesToLevelSet; --quick: 100k at 256³ only;\n"
-             "  --sweep: SDF by fast sweeping instead of volumeToMesh+meshToLevelSet; --refine: mesh refinement\n");
+             "  --sdf-method: SDF construction (default: the library's); --sweep = --sdf-method sweep;\n"
+             "  --refine: mesh refinement of --sdf-method mesh\n");
       return 0;
     } else return 2;
   }
@@ -177,8 +187,11 @@ int mgs_bench_vdb(int argc, char **argv) {
   for (int i = 0; i < nn; i++) if (ns[i] < 1 || ns[i] > 100000000) { fprintf(stderr, "morsegs bench vdb: bad size\n"); return 2; }
   for (int i = 0; i < nr; i++) if (rs[i] < 8 || rs[i] > 8192) { fprintf(stderr, "morsegs bench vdb: bad resolution\n"); return 2; }
 
-  printf("# morsegs bench vdb: %d threads, SDF method %s (mesh refine %d)\n", mgs_parallel_max_threads(),
-         method == MGS_VDB_SDF_MESH ? "mesh" : "sweep", refine < 0 ? 2 : refine);
+  if (method == MGS_VDB_SDF_MESH)
+    printf("# morsegs bench vdb: %d threads, SDF method mesh (refine %d)\n", mgs_parallel_max_threads(), refine < 0 ? 2 : refine);
+  else
+    printf("# morsegs bench vdb: %d threads, SDF method %s\n", mgs_parallel_max_threads(),
+           method == MGS_VDB_SDF_SWEEP ? "sweep" : "closest");
   printf("| Gaussians | eff. res | voxel | α-field s | SDF s | total s (CPU s) | peak RSS MiB | α active | SDF active (dense bbox) | SDF B/active | α+SDF B/active | P2LS s (CPU s) | P2LS peak MiB | P2LS active | P2LS B/active |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   fflush(stdout);

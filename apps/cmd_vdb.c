@@ -26,7 +26,8 @@ static void usage(FILE *f) {
           "  --k-sigma K              each Gaussian covers K standard deviations (3)\n"
           "  --small peak|mass|none   sub-voxel Gaussians: low-pass keeping the peak (default),\n"
           "                           mass-preserving low-pass, or none\n"
-          "  --sdf-method mesh|sweep  volumeToMesh+meshToLevelSet (default) or fast sweeping\n"
+          "  --sdf-method closest|mesh|sweep  closest points on {A = T} carried through the band\n"
+          "                           (default), volumeToMesh+meshToLevelSet, or fast sweeping\n"
           "  --mem-budget GB          refuse builds estimated above this (default 60%% of RAM)\n"
           "  --mesh OUT.ply|OUT.obj   also write the zero level set as a triangle mesh\n"
           "  --adaptivity A           mesh simplification in [0,1] (0)\n"
@@ -115,7 +116,8 @@ int mgs_cmd_vdb(int argc, char **argv) {
       case 'M':
         if (!strcmp(optarg, "mesh")) sp.method = MGS_VDB_SDF_MESH;
         else if (!strcmp(optarg, "sweep")) sp.method = MGS_VDB_SDF_SWEEP;
-        else { fprintf(stderr, "morsegs vdb: --sdf-method '%s': expected mesh or sweep\n", optarg); return 2; }
+        else if (!strcmp(optarg, "closest")) sp.method = MGS_VDB_SDF_CLOSEST;
+        else { fprintf(stderr, "morsegs vdb: --sdf-method '%s': expected closest, mesh or sweep\n", optarg); return 2; }
         break;
       case 'B':
         if (!parse_double(optarg, &v) || v <= 0) {

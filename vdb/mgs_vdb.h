@@ -130,13 +130,18 @@ double mgs_vdb_voxel_size_for(size_t n, const float *mean, const mgs_vdb_alpha_p
 
 /* ---------------------------------------------------------------- SDF and fog */
 typedef enum mgs_vdb_sdf_method {
-  /* volumeToMesh(A, τ) then meshToLevelSet: exact distances to the polygonized surface.
-   * Default: measured the more accurate (max band error 0.076 voxel on a 4-voxel sphere,
-   * tests/vdb/test_vdb_field). */
+  /* volumeToMesh(A, τ) then meshToLevelSet: distances to the polygonized surface (max band
+   * error 0.076 voxel on a 4-voxel sphere, 0.18 on a 2-voxel-curvature ellipsoid), ~4x the
+   * CPU of CLOSEST; its flood-fill sign calls a hollow shell's cavity inside. */
   MGS_VDB_SDF_MESH = 0,
   /* tools::fogToSdf (fast sweeping) on the α-field dilated by the band: first order
-   * (0.44 voxel on the same sphere) but 4-6x less CPU (bench/RESULTS-vdb.md). */
-  MGS_VDB_SDF_SWEEP = 1
+   * (0.44 voxel on the same sphere), cheapest. */
+  MGS_VDB_SDF_SWEEP = 1,
+  /* Default. Closest points on {A = τ} (Chopp's iteration on the triquadratic interpolant)
+   * at the voxels next to the interface, carried ring by ring through the band and refined:
+   * 0.016 / 0.046 voxel on the sphere / ellipsoid (tests/vdb/test_vdb_field),
+   * bench/RESULTS-vdb.md for the cost. */
+  MGS_VDB_SDF_CLOSEST = 2
 } mgs_vdb_sdf_method;
 
 typedef struct mgs_vdb_sdf_params {

@@ -58,6 +58,87 @@ static double sphere_band_error(const mgs_vdb_grid *s, const double c[3], double
   return worst;
 }
 
+/* Max |sdf - exact| / h over the active band voxels, exact(x) = signed distance at world x. */
+typedef double (*exact_fn)(const void *ctx, const double x[3]);
+static double band_error(const mgs_vdb_grid *s, exact_fn exact, const void *ctx, size_t *count) {
+  size_t nl = mgs_vdb_leaf_count(s);
+  mgs_vdb_leaf_view *lv = malloc(nl * sizeof *lv);
+  mgs_vdb_leaf_views(s, lv, nl);
+  double h = mgs_vdb_grid_voxel_size(s), worst = 0;
+  *count = 0;
+  for (size_t l = 0; l < nl; l++)
+    for (int off = 0; off < 512; off++) {
+      if (!mgs_vdb_leaf_is_active(&lv[l], off)) continue;
+      double ijk[3] = {lv[l].origin[0] + (off >> 6), lv[l].origin[1] + ((off >> 3) & 7), lv[l].origin[2] + (off & 7)};
+      double x[3];
+      mgs_vdb_index_to_world(s, ijk, x);
+      double e = fabs(lv[l].values[off] - exact(ctx, x)) / h;
+      if (!(e <= worst)) worst = e;
+      (*count)++;
+    }
+  free(lv);
+  return worst;
+}
+
+/* Ellipsoid {(y-c)ᵀ M (y-c) = ρ²} in M's eigenbasis (V columns, eigenvalues lam): semi-axes
+ * ax = ρ/sqrt(lam). Signed distance by Eberly's root of Σ (ax z/(t + ax²))² = 1. */
+typedef struct { double c[3], V[9], ax[3]; } ellipsoid;
+static double ellipsoid_distance(const void *ctx, const double x[3]) {
+  const ellipsoid *E = ctx;
+  double z[3], q = 0, amin = INFINITY, zn = 0;
+  for (int k = 0; k < 3; k++) {
+    z[k] = 0;
+    for (int a = 0; a < 3; a++) z[k] += E->V[3 * a + k] * (x[a] - E->c[a]);
+    q += z[k] * z[k] / (E->ax[k] * E->ax[k]);
+    if (E->ax[k] < amin) amin = E->ax[k];
+    zn += z[k] * z[k];
+  }
+  double lo = -amin * amin * (1 - 1e-12), hi = 2 * sqrt(zn) * 8; /* F(lo) > 0 >= F(hi) */
+  for (int it = 0; it < 200; it++) {
+    double t = 0.5 * (lo + hi), F = -1;
+    for (int k = 0; k < 3; k++) { double r = E->ax[k] * z[k] / (t + E->ax[k] * E->ax[k]); F += r * r; }
+    if (F > 0) lo = t; else hi = t;
+  }
+  double t = 0.5 * (lo + hi), d2 = 0;
+  for (int k = 0; k < 3; k++) { double y = E->ax[k] * E->ax[k] * z[k] / (t + E->ax[k] * E->ax[k]); d2 += (z[k] - y) * (z[k] - y); }
+  return q < 1 ? -sqrt(d2) : sqrt(d2);
+}
+
+/* The merged pair: A = α'(e^{-((x-d)²+r²)/2s²} + e^{-((x+d)²+r²)/2s²}) = τ is a surface of
+ * revolution about x; its profile r(x)² = 2 s² ln(α'(E₋+E₊)/τ) on |x| <= xm. */
+typedef struct { double ap, s2, d, tau, xm; } merged;
+static void merged_profile(const merged *M, double th, double *px, double *pr) {
+  double x = M->xm * cos(th);
+  double e = M->ap * (exp(-0.5 * (x - M->d) * (x - M->d) / M->s2) + exp(-0.5 * (x + M->d) * (x + M->d) / M->s2));
+  double r2 = 2 * M->s2 * log(e / M->tau);
+  *px = x;
+  *pr = r2 > 0 ? sqrt(r2) : 0;
+}
+static double merged_distance(const void *ctx, const double x[3]) {
+  const merged *M = ctx;
+  const double qx = x[0], qr = sqrt(x[1] * x[1] + x[2] * x[2]);
+  enum { N = 2000 };
+  double best = INFINITY, bth = 0;
+  for (int i = 0; i <= N; i++) { /* coarse, clustered at the tips (cosine spacing) */
+    double th = M_PI * i / N, px, pr;
+    merged_profile(M, th, &px, &pr);
+    double d2 = (px - qx) * (px - qx) + (pr - qr) * (pr - qr);
+    if (d2 < best) best = d2, bth = th;
+  }
+  double lo = fmax(0, bth - M_PI / N), hi = fmin(M_PI, bth + M_PI / N);
+  for (int it = 0; it < 80; it++) { /* golden-section refinement of the nearest parameter */
+    double m1 = lo + 0.382 * (hi - lo), m2 = lo + 0.618 * (hi - lo), x1, r1, x2, r2;
+    merged_profile(M, m1, &x1, &r1);
+    merged_profile(M, m2, &x2, &r2);
+    if ((x1 - qx) * (x1 - qx) + (r1 - qr) * (r1 - qr) < (x2 - qx) * (x2 - qx) + (r2 - qr) * (r2 - qr)) hi = m2; else lo = m1;
+  }
+  double px, pr;
+  merged_profile(M, 0.5 * (lo + hi), &px, &pr);
+  double d = sqrt(fmin(best, (px - qx) * (px - qx) + (pr - qr) * (pr - qr)));
+  double A = M->ap * (exp(-0.5 * ((qx - M->d) * (qx - M->d) + qr * qr) / M->s2) + exp(-0.5 * ((qx + M->d) * (qx + M->d) + qr * qr) / M->s2));
+  return A > M->tau ? -d : d;
+}
+
 static void test_isotropic_sphere(void) {
   const double sigma = 1.0, alpha = 0.9, tau = 0.5, h = 0.25, c[3] = {0.3, -0.2, 0.1};
   mgs_gaussians *g = mgs_gaussians_create(4, 0);
@@ -84,16 +165,19 @@ static void test_isotropic_sphere(void) {
   CHECK_NEAR(worst_a, 0, 2e-6);
   mgs_vdb_grid *s_mesh = build_sdf(a, MGS_VDB_SDF_MESH, tau);
   mgs_vdb_grid *s_sweep = build_sdf(a, MGS_VDB_SDF_SWEEP, tau);
-  if (s_mesh && s_sweep) {
-    size_t n1 = 0, n2 = 0;
+  mgs_vdb_grid *s_closest = build_sdf(a, MGS_VDB_SDF_CLOSEST, tau);
+  if (s_mesh && s_sweep && s_closest) {
+    size_t n1 = 0, n2 = 0, n3 = 0;
     double e1 = sphere_band_error(s_mesh, c, R, &n1), e2 = sphere_band_error(s_sweep, c, R, &n2);
-    fprintf(stderr, "  sphere R=%.3f (%.1f voxels): max band error MESH %.4f voxel (%zu voxels), SWEEP %.4f voxel (%zu voxels)\n",
-            R, R / h, e1, n1, e2, n2);
+    double e3 = sphere_band_error(s_closest, c, R, &n3);
+    fprintf(stderr, "  sphere R=%.3f (%.1f voxels): max band error MESH %.4f voxel (%zu voxels), SWEEP %.4f voxel (%zu voxels), "
+            "CLOSEST %.4f voxel (%zu voxels)\n", R, R / h, e1, n1, e2, n2, e3, n3);
     /* For the record (bench/RESULTS-vdb.md): the cheaper mesh refinements. */
     for (int refine = 0; refine < 2; refine++) {
       mgs_vdb_sdf_params sp;
       mgs_vdb_sdf_params_default(&sp);
       sp.tau = tau;
+      sp.method = MGS_VDB_SDF_MESH;
       sp.mesh_refine = refine;
       mgs_vdb_grid *sr = NULL;
       mgs_error err = {0};
@@ -104,32 +188,41 @@ static void test_isotropic_sphere(void) {
     }
     CHECK(n1 > 100);
     CHECK_NEAR(e1, 0, 0.1); /* the contract: within a tenth of a voxel */
+    CHECK(n3 > 100);
+    CHECK_NEAR(e3, 0, 0.1);
     CHECK(e2 < 1.0);        /* first-order fast sweeping: measured, reported, looser */
-    CHECK(mgs_vdb_grid_class(s_mesh) == MGS_VDB_CLASS_LEVEL_SET);
-    CHECK_NEAR(mgs_vdb_grid_background(s_mesh), 3 * h, 1e-6);
-    /* Interior is negative (inactive tile/voxel), far outside is +background. */
-    int32_t centre[3] = {0, 0, 0}, far[3] = {100, 0, 0}; /* index 0 = the snapped scene centre */
-    int act = 1;
-    CHECK(mgs_vdb_value(s_mesh, centre, &act) < 0);
-    CHECK_NEAR(mgs_vdb_value(s_mesh, far, NULL), 3 * h, 1e-6);
-    /* Band half-width: every active voxel is within w·h. */
-    size_t nl = mgs_vdb_leaf_count(s_mesh);
-    mgs_vdb_leaf_view *lv = malloc(nl * sizeof *lv);
-    mgs_vdb_leaf_views(s_mesh, lv, nl);
-    int outside_band = 0;
-    for (size_t l = 0; l < nl; l++)
-      for (int off = 0; off < 512; off++)
-        if (mgs_vdb_leaf_is_active(&lv[l], off) && fabsf(lv[l].values[off]) > 3 * h + 1e-6) outside_band++;
-    CHECK(outside_band == 0);
-    free(lv);
-    /* Gradient on demand: the unit normal at a surface point. */
-    float p[3] = {(float)(c[0] + R), (float)c[1], (float)c[2]}, gr[3];
-    mgs_vdb_sample_gradient(s_mesh, 1, p, gr, NULL);
-    CHECK_NEAR(gr[0], 1, 0.05);
-    CHECK_NEAR(gr[1], 0, 0.05);
-    CHECK_NEAR(gr[2], 0, 0.05);
+    /* Both constructions that meet the contract cover the same band (no voxel lost). */
+    CHECK_MSG(fabs((double)n3 - (double)n1) < 0.02 * n1, "band voxels MESH %zu CLOSEST %zu", n1, n3);
+    const mgs_vdb_grid *exact[2] = {s_mesh, s_closest};
+    for (int m = 0; m < 2; m++) {
+      const mgs_vdb_grid *sg = exact[m];
+      CHECK(mgs_vdb_grid_class(sg) == MGS_VDB_CLASS_LEVEL_SET);
+      CHECK_NEAR(mgs_vdb_grid_background(sg), 3 * h, 1e-6);
+      /* Interior is negative (inactive tile/voxel), far outside is +background. */
+      int32_t centre[3] = {0, 0, 0}, far[3] = {100, 0, 0}; /* index 0 = the snapped scene centre */
+      int act = 1;
+      CHECK(mgs_vdb_value(sg, centre, &act) < 0);
+      CHECK_NEAR(mgs_vdb_value(sg, far, NULL), 3 * h, 1e-6);
+      /* Band half-width: every active voxel is within w·h. */
+      size_t nl = mgs_vdb_leaf_count(sg);
+      mgs_vdb_leaf_view *lv = malloc(nl * sizeof *lv);
+      mgs_vdb_leaf_views(sg, lv, nl);
+      int outside_band = 0;
+      for (size_t l = 0; l < nl; l++)
+        for (int off = 0; off < 512; off++)
+          if (mgs_vdb_leaf_is_active(&lv[l], off) && fabsf(lv[l].values[off]) > 3 * h + 1e-6) outside_band++;
+      CHECK(outside_band == 0);
+      free(lv);
+      /* Gradient on demand: the unit normal at a surface point. */
+      float p[3] = {(float)(c[0] + R), (float)c[1], (float)c[2]}, gr[3];
+      mgs_vdb_sample_gradient(sg, 1, p, gr, NULL);
+      CHECK_NEAR(gr[0], 1, 0.05);
+      CHECK_NEAR(gr[1], 0, 0.05);
+      CHECK_NEAR(gr[2], 0, 0.05);
+    }
   }
   mgs_vdb_grid_destroy(s_mesh);
+  mgs_vdb_grid_destroy(s_closest);
   mgs_vdb_grid_destroy(s_sweep);
   mgs_vdb_grid_destroy(a);
   mgs_gaussians_destroy(g);
@@ -144,7 +237,9 @@ static void test_anisotropic_ellipsoid(void) {
   mgs_gaussians *g = mgs_gaussians_create(4, 0);
   vt_add(g, c[0], c[1], c[2], s, q, alpha);
   mgs_vdb_grid *a = build_alpha(g, h, MGS_VDB_SMALL_MASS);
-  mgs_vdb_grid *sdf = a ? build_sdf(a, MGS_VDB_SDF_MESH, tau) : NULL;
+  static const mgs_vdb_sdf_method methods[2] = {MGS_VDB_SDF_MESH, MGS_VDB_SDF_CLOSEST};
+  for (int m = 0; m < 2 && a; m++) {
+  mgs_vdb_grid *sdf = build_sdf(a, methods[m], tau);
   if (sdf) {
     /* Filtered covariance and its inverse. */
     double cov[9], f[9], inv[9];
@@ -175,10 +270,20 @@ static void test_anisotropic_ellipsoid(void) {
       double e = fabs(got - expect) / h;
       if (!(e <= worst)) worst = e;
     }
-    fprintf(stderr, "  ellipsoid: max zero-crossing error along 30 rays %.4f voxel\n", worst);
+    /* Max band error against the exact distance to the ellipsoid. */
+    ellipsoid E;
+    double lam[3];
+    mgs_sym3_eigen(inv, lam, E.V);
+    for (int k = 0; k < 3; k++) E.c[k] = c[k], E.ax[k] = sqrt(2 * log(ap / tau) / lam[k]);
+    size_t nb = 0;
+    double eb = band_error(sdf, ellipsoid_distance, &E, &nb);
+    fprintf(stderr, "  ellipsoid (%s): max zero-crossing error along 30 rays %.4f voxel, max band error %.4f voxel (%zu voxels)\n",
+            m ? "CLOSEST" : "MESH", worst, eb, nb);
     CHECK_NEAR(worst, 0, 0.1);
+    if (methods[m] == MGS_VDB_SDF_CLOSEST) CHECK_NEAR(eb, 0, 0.1);
   }
   mgs_vdb_grid_destroy(sdf);
+  }
   mgs_vdb_grid_destroy(a);
   mgs_gaussians_destroy(g);
 }
@@ -191,7 +296,9 @@ static void test_two_merge(void) {
   vt_add(g, -d, 0, 0, s, QI, alpha);
   vt_add(g, d, 0, 0, s, QI, alpha);
   mgs_vdb_grid *a = build_alpha(g, h, MGS_VDB_SMALL_MASS);
-  mgs_vdb_grid *sdf = a ? build_sdf(a, MGS_VDB_SDF_MESH, tau) : NULL;
+  static const mgs_vdb_sdf_method methods[2] = {MGS_VDB_SDF_MESH, MGS_VDB_SDF_CLOSEST};
+  for (int m = 0; m < 2 && a; m++) {
+  mgs_vdb_grid *sdf = build_sdf(a, methods[m], tau);
   if (sdf) {
     const double s2 = sigma * sigma + 0.25 * h * h, ap = alpha * pow(sigma * sigma / s2, 1.5);
     /* Field at the origin voxel: sum of both. */
@@ -205,17 +312,55 @@ static void test_two_merge(void) {
     /* Along x: A(x) = α'(e^{-(x-d)²/2σ'²} + e^{-(x+d)²/2σ'²}) = τ, solved by bisection. */
     double lo = 0, hi = d + 5 * sigma;
     for (int it = 0; it < 80; it++) {
-      double m = 0.5 * (lo + hi);
-      double A = ap * (exp(-0.5 * (m - d) * (m - d) / s2) + exp(-0.5 * (m + d) * (m + d) / s2));
-      if (A > tau) lo = m; else hi = m;
+      double xm = 0.5 * (lo + hi);
+      double A = ap * (exp(-0.5 * (xm - d) * (xm - d) / s2) + exp(-0.5 * (xm + d) * (xm + d) / s2));
+      if (A > tau) lo = xm; else hi = xm;
     }
     double x_got = vt_ray_zero(sdf, origin, dir_x, 0, lo + 3 * h);
-    fprintf(stderr, "  merge: y crossing %.5f (analytic %.5f), x crossing %.5f (numeric %.5f)\n", y_got, y_expect, x_got, lo);
+    fprintf(stderr, "  merge (%s): y crossing %.5f (analytic %.5f), x crossing %.5f (numeric %.5f)\n", m ? "CLOSEST" : "MESH",
+            y_got, y_expect, x_got, lo);
     CHECK_NEAR(x_got, lo, 0.1 * h);
+    merged M = {ap, s2, d, tau, lo};
+    size_t nb = 0;
+    double eb = band_error(sdf, merged_distance, &M, &nb);
+    fprintf(stderr, "  merge (%s): max band error %.4f voxel (%zu voxels)\n", m ? "CLOSEST" : "MESH", eb, nb);
+    if (methods[m] == MGS_VDB_SDF_CLOSEST) CHECK_NEAR(eb, 0, 0.1);
     /* Inside at the midpoint although each Gaussian alone never reaches τ. */
     CHECK(mgs_vdb_value(sdf, o, NULL) < 0);
   }
   mgs_vdb_grid_destroy(sdf);
+  }
+  mgs_vdb_grid_destroy(a);
+  mgs_gaussians_destroy(g);
+}
+
+/* A hollow shell of Gaussians (a trained surface): the cavity has A = 0, so it is outside
+ * {A > τ} and its SDF must be positive. (MESH's meshToLevelSet decides inside/outside by
+ * flood fill from the far outside, so it calls the enclosed cavity inside: printed only.) */
+static void test_hollow_shell(void) {
+  const double h = 0.05, sig[3] = {0.08, 0.08, 0.08};
+  mgs_gaussians *g = mgs_gaussians_create(1024, 0);
+  const int n = 600;
+  for (int i = 0; i < n; i++) { /* Fibonacci sphere, radius 1 */
+    double z = 1 - (2.0 * i + 1) / n, r = sqrt(1 - z * z), ph = i * M_PI * (3 - sqrt(5.0));
+    vt_add(g, r * cos(ph), r * sin(ph), z, sig, QI, 0.8);
+  }
+  mgs_vdb_grid *a = build_alpha(g, h, MGS_VDB_SMALL_PEAK);
+  static const mgs_vdb_sdf_method methods[3] = {MGS_VDB_SDF_MESH, MGS_VDB_SDF_SWEEP, MGS_VDB_SDF_CLOSEST};
+  static const char *names[3] = {"MESH", "SWEEP", "CLOSEST"};
+  for (int m = 0; m < 3 && a; m++) {
+    mgs_vdb_grid *sdf = build_sdf(a, methods[m], 0.5);
+    if (!sdf) continue;
+    float centre[3] = {0, 0, 0}, shell[3] = {0, 0, 0.999f}, vc = 0, vs = 0, va = 1;
+    mgs_vdb_sample(a, 1, centre, &va);
+    mgs_vdb_sample(sdf, 1, centre, &vc);
+    mgs_vdb_sample(sdf, 1, shell, &vs);
+    fprintf(stderr, "  hollow shell (%s): A(centre) %.3g, sdf(centre) %+.4f, sdf(on the shell) %+.4f\n", names[m], va, vc, vs);
+    CHECK(va < 1e-6);
+    if (methods[m] != MGS_VDB_SDF_MESH) CHECK(vc > 0);
+    CHECK(vs < 0);
+    mgs_vdb_grid_destroy(sdf);
+  }
   mgs_vdb_grid_destroy(a);
   mgs_gaussians_destroy(g);
 }
@@ -345,6 +490,7 @@ int main(void) {
   RUN(test_isotropic_sphere);
   RUN(test_anisotropic_ellipsoid);
   RUN(test_two_merge);
+  RUN(test_hollow_shell);
   RUN(test_subvoxel);
   RUN(test_capped_and_budget);
   RUN(test_bad_gaussians);

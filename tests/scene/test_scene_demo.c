@@ -1,5 +1,7 @@
-/* `morsegs demo` at this stage: builds the genus-2 dataset, prints what it wrote, the
- * dataset loads, and a second run keeps it (no overwrite without --force). */
+/* `morsegs demo`: builds the genus-2 dataset, trains, evaluates, exports and analyses it;
+ * the dataset loads, the report holds figures a working pipeline reaches, and a second
+ * run keeps what exists (no overwrite without --force). */
+#include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 #include "mgs_test.h"
@@ -29,6 +31,22 @@ int main(void) {
     CHECK(d->init_points && d->init_points->n > 0);
   }
   mgs_dataset_destroy(d);
+  /* The report: PSNR well above what a broken trainer reaches, and one persistent
+   * connected component in the SDF of the trained model. */
+  char report[1100], line[1024];
+  snprintf(report, sizeof report, "%s/REPORT.md", root);
+  FILE *f = fopen(report, "r");
+  CHECK(f != NULL);
+  double psnr = 0;
+  int b0 = -1, b1 = -1, b2 = -1;
+  while (f && fgets(line, sizeof line, f)) {
+    if (strstr(line, "| PSNR |")) sscanf(strstr(line, "| PSNR |") + 8, "%lf", &psnr);
+    const char *k = "| Betti numbers of features persisting over 2 voxels |";
+    if (strstr(line, k)) sscanf(strstr(line, k) + strlen(k), "%d, %d, %d", &b0, &b1, &b2);
+  }
+  if (f) fclose(f);
+  CHECK(psnr > 25);
+  CHECK(b0 >= 1 && b1 >= 0 && b2 >= 0);
   CHECK(run_cmd(cmd, log_path) == 0);
   CHECK(file_contains(log_path, "kept"));
   snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' --bogus", cli, root);

@@ -226,7 +226,11 @@ int mgs_bench_train(int argc, char **argv) {
   mgs_error err;
   mgs_error_clear(&err);
   if (mgs_mkdir_p(work, &err) || mgs_mkdir_p(out, &err)) return mgs_cli_fail("bench train", &err);
-  static const int evals[] = {100, 250, 500, 1000, 1500, 2000, 3000, 4000, 5000, 6000, 7000, 10000, 15000, 20000, 30000};
+  /* Not at the opacity resets (iteration 500 = densify_from with a white background, then
+   * every 3000): the model is transparent by design right after one, and a curve sampled
+   * there shows the schedule, not the training. */
+  static const int evals[] = {100, 250, 400, 1000, 1500, 2000, 2500, 2900, 3500, 4000, 5000, 5900, 6500, 7000,
+                              10000, 15000, 20000, 30000};
   int n_evals = (int)(sizeof evals / sizeof *evals);
   int my_evals[32], nm = 0;
   for (int e = 0; e < n_evals; e++) if (evals[e] < iters) my_evals[nm++] = evals[e];

@@ -2,14 +2,17 @@
  * surface (the band is sparse) at effective 256³, 512³, 1024³ (voxel size = the torus's
  * largest bounding-box side / N), with the active voxel count beside the dense count, and
  * OpenVDB's own ParticlesToLevelSet on spheres at the same voxel size, in the same run.
- * Peak memory per case: the kernel's high-water mark is reset before each case
- * (/proc/self/clear_refs), so "peak" is the case's own peak RSS. */
+ * Peak memory: each case, ours and OpenVDB's apart, runs in its own forked process whose
+ * high-water mark is reset first (/proc/self/clear_refs), so "peak" is that build's own peak
+ * RSS (the shared input arrays included). */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include "apps/mgs_cli.h"
 #include "core/mgs_log.h"
 #include "core/mgs_parallel.h"
@@ -76,12 +79,7 @@ typedef struct {
   char msg[1100];
 } row;
 
-static void run_case(row *rw, size_t n, int res, const float *mean, const float *cov, const float *alpha, float sig_t,
-                     int method, int refine) {
-  memset(rw, 0, sizeof *rw);
-  rw->n = n;
-  rw->res = res;
-  rw->h = 2 * (TOR_R + TOR_r) / res;
+static void run_ours(row *rw, size_t n, const float *mean, const float *cov, const float *alpha, int method, int refine) {
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
   ap.voxel_size = rw->h;
@@ -120,14 +118,17 @@ static void run_case(row *rw, size_t n, int res, const float *mean, const float 
   rw->dense = mgs_vdb_grid_active_bbox(s, lo, hi) ? (double)(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) : 0;
   mgs_vdb_grid_destroy(a);
   mgs_vdb_grid_destroy(s);
+}
 
-  /* OpenVDB's ParticlesToLevelSet on spheres at the same positions and voxel size, radius
-   * 2σt (the disc's visible radius) but at least OpenVDB's 1.5-voxel minimum. */
+/* OpenVDB's ParticlesToLevelSet on spheres at the same positions and voxel size, radius
+ * 2σt (the disc's visible radius) but at least OpenVDB's 1.5-voxel minimum. */
+static void run_p2ls(row *rw, size_t n, const float *mean, float sig_t) {
+  mgs_error err = {0};
   float *rad = malloc(n * sizeof(float));
+  if (!rad) return;
   for (size_t i = 0; i < n; i++) rad[i] = (float)fmax(2.0 * sig_t, 1.51 * rw->h);
   reset_peak();
-  c0 = cpu_seconds();
-  t0 = mgs_now();
+  double c0 = cpu_seconds(), t0 = mgs_now();
   mgs_vdb_grid *p = NULL;
   if (mgs_vdb_particles_to_level_set(n, mean, rad, rw->h, 3, &p, &rw->p2ls_ignored, &err) == MGS_OK) {
     rw->t_p2ls = mgs_now() - t0;
@@ -138,6 +139,66 @@ static void run_case(row *rw, size_t n, int res, const float *mean, const float 
   }
   mgs_vdb_grid_destroy(p);
   free(rad);
+}
+
+/* part: 1 = ours, 2 = OpenVDB's ParticlesToLevelSet. */
+static void run_case(row *rw, size_t n, int res, const float *mean, const float *cov, const float *alpha, float sig_t,
+                     int method, int refine, int part) {
+  memset(rw, 0, sizeof *rw);
+  rw->n = n;
+  rw->res = res;
+  rw->h = 2 * (TOR_R + TOR_r) / res;
+  if (part == 1) run_ours(rw, n, mean, cov, alpha, method, refine);
+  else run_p2ls(rw, n, mean, sig_t);
+}
+
+/* Each part in a forked child: freed heap stays in a process's RSS, so a case run after a
+ * larger one would report the larger one's peak. The parent never starts TBB (the scene is
+ * made serially), so each child starts its own scheduler. */
+static void run_case_forked(row *rw, size_t n, int res, const float *mean, const float *cov, const float *alpha,
+                            float sig_t, int method, int refine, int part) {
+  int fds[2];
+  if (pipe(fds) != 0) { run_case(rw, n, res, mean, cov, alpha, sig_t, method, refine, part); return; }
+  fflush(stdout);
+  fflush(stderr);
+  pid_t pid = fork();
+  if (pid < 0) {
+    close(fds[0]);
+    close(fds[1]);
+    run_case(rw, n, res, mean, cov, alpha, sig_t, method, refine, part);
+    return;
+  }
+  if (pid == 0) {
+    close(fds[0]);
+    row cr;
+    run_case(&cr, n, res, mean, cov, alpha, sig_t, method, refine, part);
+    const char *b = (const char *)&cr;
+    for (size_t off = 0; off < sizeof cr;) {
+      ssize_t k = write(fds[1], b + off, sizeof cr - off);
+      if (k <= 0) break;
+      off += (size_t)k;
+    }
+    close(fds[1]);
+    _exit(0);
+  }
+  close(fds[1]);
+  size_t got = 0;
+  while (got < sizeof *rw) {
+    ssize_t k = read(fds[0], (char *)rw + got, sizeof *rw - got);
+    if (k <= 0) break;
+    got += (size_t)k;
+  }
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (got != sizeof *rw) {
+    memset(rw, 0, sizeof *rw);
+    rw->n = n;
+    rw->res = res;
+    rw->h = 2 * (TOR_R + TOR_r) / res;
+    rw->refused = 1;
+    snprintf(rw->msg, sizeof rw->msg, "the measuring process failed (status %d)", status);
+  }
 }
 
 int mgs_bench_vdb(int argc, char **argv) {
@@ -202,8 +263,15 @@ int mgs_bench_vdb(int argc, char **argv) {
     float sig_t;
     torus_scene(n, mean, cov, alpha, &sig_t);
     for (int j = 0; j < nr; j++) {
-      row rw;
-      run_case(&rw, n, rs[j], mean, cov, alpha, sig_t, method, refine);
+      row rw, rp;
+      run_case_forked(&rw, n, rs[j], mean, cov, alpha, sig_t, method, refine, 1);
+      run_case_forked(&rp, n, rs[j], mean, cov, alpha, sig_t, method, refine, 2);
+      rw.t_p2ls = rp.t_p2ls;
+      rw.cpu_p2ls = rp.cpu_p2ls;
+      rw.p2ls_peak_mib = rp.p2ls_peak_mib;
+      rw.p2ls_active = rp.p2ls_active;
+      rw.p2ls_bytes = rp.p2ls_bytes;
+      rw.p2ls_ignored = rp.p2ls_ignored;
       if (rw.refused) {
         printf("| %zu | %d³ | %.5f | refused: %s |\n", n, rs[j], rw.h, rw.msg);
         continue;

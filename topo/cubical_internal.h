@@ -149,6 +149,10 @@ enum { CUB_NEG = 1, CUB_CLEARED = 2, CUB_PAIRED_ROW = 4 };
 mgs_status cub_pairs_d0(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);
 /* Dimension 2: reduction of the 3-cell columns (twist). Marks cleared 2-cells. */
 mgs_status cub_pairs_d2(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);
+/* Dimension 2 by union-find on the dual graph (critical 3-cells + one outside node, joined by
+ * the coboundaries of the 2-cells, topo/pairs_dual.c): same pairs and flags as cub_pairs_d2.
+ * *done = 0 (nothing changed) when a 2-cell has more than two cofaces: reduce instead. */
+mgs_status cub_pairs_d2_dual(const cub_complex *cx, uint8_t *flags, cub_pairs *out, int *done, mgs_error *err);
 /* Dimension 1: reduction of the 2-cell columns with clearing (D2 births skipped) and
  * compression (negative edges dropped), then essentials of every dimension. */
 mgs_status cub_pairs_d1(const cub_complex *cx, uint8_t *flags, cub_pairs *out, mgs_error *err);

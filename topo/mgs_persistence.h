@@ -24,9 +24,11 @@
  * and their boundaries are those of the Morse complex (V-path traversal in parallel,
  * topo/morse_boundary.c). The diagram equals the full reduction's exactly (values, cells
  * and voxels on generic fields); opts.full_reduction = 1 keeps that reference path.
- * Pairing: union-find for dimension 0, twist reduction of the 3-cell columns for
- * dimension 2, reduction with clearing + compression for dimension 1 (topo/pairs_*.c).
- * Memory about 20-50 bytes per active voxel at 256^3-1024^3 (bench/RESULTS-topo.md).
+ * Pairing: union-find for dimension 0, union-find on the dual (critical 3-cells + the
+ * outside, joined by the 2-cells' coboundaries) for dimension 2 (topo/pairs_dual.c; the twist
+ * reduction of the 3-cell columns with opts.d2_reduction = 1), reduction with clearing (the
+ * D2 births) + compression for dimension 1 (topo/pairs_*.c).
+ * Memory about 19-26 bytes per active voxel at 128^3-1024^3 (bench/RESULTS-topo.md).
  * Coordinates: |voxel index| < 2^19; at most 2^31 cells.
  *
  * Dense layout: values[(x*ny + y)*nz + z] (same as the VDB leaf order (x<<6)|(y<<3)|z),
@@ -65,6 +67,8 @@ typedef struct mgs_topo_opts {
   double origin[3];
   int full_reduction;     /* 1: skip the discrete gradient and reduce every band cell (the
                              reference path, for tests and benchmarks); 0 (default): gradient */
+  int d2_reduction;       /* 1: dimension-2 pairs by twist reduction of the 3-cell columns (the
+                             previous path, for tests); 0 (default): union-find on the dual */
 } mgs_topo_opts;
 
 void mgs_topo_opts_default(mgs_topo_opts *o); /* V, sublevel, w = inf, 0, 1, (0,0,0) */
@@ -83,6 +87,7 @@ typedef struct mgs_topo_stats {
                               optimal gradient would leave) */
   size_t pairs_d[3];      /* reported pairs per dimension (incl. essential) */
   size_t truncated;       /* reported pairs set by the clamp */
+  int d2_union_find;      /* 1: dimension 2 was paired by the dual union-find (0: reduction) */
   double effective_w;     /* clamp actually used */
   double seconds_build;   /* input, cell enumeration and the gradient */
   double seconds_morse;   /* Morse boundaries (V-path traversal) */

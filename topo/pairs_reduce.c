@@ -1,8 +1,10 @@
 /* Dimensions 1 and 2: boundary-matrix reduction (standard column algorithm, columns in
- * filtration order) over the reduced complex, with the twist/clearing optimisation
- * (2-cells that are born in a dimension-2 pair are never reduced) and compression (edges
- * that kill a component are dropped as rows: Bauer-Kerber-Reininghaus, "Clear and
- * Compress"). Most columns are apparent pairs and stop at their first pivot. */
+ * filtration order) over the reduced complex. Dimension 2 goes through the dual union-find
+ * (topo/pairs_dual.c) by default; its twist reduction here is the reference path
+ * (opts.d2_reduction) and the fallback. Dimension 1 uses clearing (2-cells born in a
+ * dimension-2 pair, however found, are never reduced) and compression (edges that kill a
+ * component are dropped as rows: Bauer-Kerber-Reininghaus, "Clear and Compress"). Most
+ * columns are apparent pairs and stop at their first pivot. */
 #include <stdlib.h>
 #include <string.h>
 #include "topo/cubical_internal.h"

@@ -1,11 +1,11 @@
 /* The persistence pipeline shared by the dense and sparse paths: sort the reduced complex,
- * pair (D0 union-find, D2 then D1 reduction), and turn rank pairs into a diagram. With the
- * discrete gradient (default) the reduced complex is the Morse complex of the critical cells
- * (topo/gradient_lowerstar.c, topo/morse_boundary.c): the lower-star matching pairs cells of
- * equal value only, so every sublevel set is a union of matched pairs and critical cells and
- * the filtered Morse complex has the same diagram (Mischaikow-Nanda 2013). Critical cells are
- * still ordered by (value, dim, key), a filtration of the Morse complex since a Morse boundary
- * holds cells of lower dimension and value <= the cell's.
+ * pair (D0 union-find, D2 union-find on the dual, D1 reduction), and turn rank pairs into a
+ * diagram. With the discrete gradient (default) the reduced complex is the Morse complex of
+ * the critical cells (topo/gradient_lowerstar.c, topo/morse_boundary.c): the lower-star
+ * matching pairs cells of equal value only, so every sublevel set is a union of matched pairs
+ * and critical cells and the filtered Morse complex has the same diagram (Mischaikow-Nanda
+ * 2013). Critical cells are still ordered by (value, dim, key), a filtration of the Morse
+ * complex since a Morse boundary holds cells of lower dimension and value <= the cell's.
  *
  * Why the reduced complex gives the box's diagram exactly:
  *  - Top: every cell of value +w (= top) enters at the last filtration value, when the box
@@ -125,7 +125,12 @@ mgs_status cub_persistence(const cub_run *run, cub_cells *cells, mgs_diagram **o
   flags = calloc(cx.n ? cx.n : 1, 1);
   if (!flags) { st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (flags)"); goto done; }
   if ((st = cub_pairs_d0(&cx, flags, &pairs, err)) != MGS_OK) goto done;
-  if ((st = cub_pairs_d2(&cx, flags, &pairs, err)) != MGS_OK) goto done;
+  {
+    int dual = 0; /* the dual union-find by default; the twist reduction on request or fallback */
+    if (!run->opts->d2_reduction && (st = cub_pairs_d2_dual(&cx, flags, &pairs, &dual, err)) != MGS_OK) goto done;
+    if (!dual && (st = cub_pairs_d2(&cx, flags, &pairs, err)) != MGS_OK) goto done;
+    if (stats) stats->d2_union_find = dual;
+  }
   if ((st = cub_pairs_d1(&cx, flags, &pairs, err)) != MGS_OK) goto done;
 
   d = mgs_diagram_create();

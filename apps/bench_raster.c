@@ -214,8 +214,10 @@ static int run_case(int size, size_t n, double min_time, bench_result *res) {
  * The trainer's steady-state step (train/trainer.c) on the benchmark scene with SH degree
  * 3 active: forward, (1-0.2) L1 + 0.2 D-SSIM against a fixed target image (a render of
  * another random scene of the same kind), backward, Adam on every group with the reference
- * learning rates (which also clears the gradients for the next backward, as the trainer). Each phase is timed in wall and process CPU time
- * (all threads); medians over the iterations, after two warm-up iterations. */
+ * learning rates, fused into the backward as the trainer runs it outside densification
+ * steps (--unfused: separate, clearing the gradients for the next backward). Each phase is
+ * timed in wall and process CPU time (all threads); medians over the iterations, after two
+ * warm-up iterations. */
 enum { PH_PROJECT, PH_BIN, PH_FWD_TILES, PH_LOSS, PH_ZERO, PH_BWD_TILES, PH_BWD_GAUSS, PH_ADAM, PH_TOTAL, PH_N };
 static const char *const ph_name[PH_N] = {"project+SH", "bin+sort", "forward tiles", "loss L1+SSIM", "zero grads",
                                           "backward tiles", "per-Gaussian bwd", "Adam", "full iteration"};
@@ -230,7 +232,7 @@ static void read_loadavg(char *buf, size_t len) {
   if (l && buf[l - 1] == '\n') buf[l - 1] = 0;
 }
 
-static int run_iteration(int size, size_t n, int iters) {
+static int run_iteration(int size, size_t n, int iters, int fused) {
   mgs_error err;
   mgs_error_clear(&err);
   mgs_gaussians *g = bench_scene(n, 12345), *other = bench_scene(n, 777);
@@ -280,13 +282,19 @@ static int run_iteration(int size, size_t n, int iters) {
     loss = (1.0 - lam) * l1 + lam * (1.0 - ss);
     (void)mgs_psnr(out.color, gt, size, size, 3); /* the trainer's progress figure */
     w[2] = mgs_now(); c[2] = cpu_now();
-    if (!clean) /* as the trainer: Adam clears the gradients it consumed */
+    if (!clean && !fused) /* as the trainer: Adam clears the gradients it consumed */
       for (int k = 0; k < MGS_PARAM_COUNT; k++)
         memset(mgs_gaussians_group(grad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
     w[3] = mgs_now(); c[3] = cpu_now();
-    if (mgs_raster_backward(r, dl, NULL, NULL, grad, gm, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
-    w[4] = mgs_now(); c[4] = cpu_now();
-    if (mgs_adam_step_zero(adam, g, grad, (1u << MGS_PARAM_COUNT) - 1, 1, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+    if (fused) { /* the trainer's steady state: Adam inside the backward */
+      if (mgs_adam_step_backward(adam, g, r, dl, NULL, NULL, gm, (1u << MGS_PARAM_COUNT) - 1, &err) != MGS_OK)
+        return mgs_cli_fail("bench raster", &err);
+      w[4] = mgs_now(); c[4] = cpu_now();
+    } else {
+      if (mgs_raster_backward(r, dl, NULL, NULL, grad, gm, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+      w[4] = mgs_now(); c[4] = cpu_now();
+      if (mgs_adam_step_zero(adam, g, grad, (1u << MGS_PARAM_COUNT) - 1, 1, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+    }
     clean = 1;
     w[5] = mgs_now(); c[5] = cpu_now();
     if (it < 0) continue;
@@ -308,6 +316,7 @@ static int run_iteration(int size, size_t n, int iters) {
   printf("full training iteration: %dx%d, %zu Gaussians, SH degree 3, %zu tile intersections, %d iterations "
          "(median), %d threads, final loss %.4f\n", size, size, n, isect, iters, mgs_parallel_max_threads(), loss);
   printf("load average before: %s | after: %s\n", la0, la1);
+  printf("backward and Adam: %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)");
   printf("  %-18s %9s %9s\n", "phase", "wall ms", "CPU ms");
   double col[2][PH_N];
   double *tmp = malloc((size_t)iters * sizeof(double));
@@ -338,8 +347,9 @@ int mgs_bench_raster(int argc, char **argv) {
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"threads", required_argument, 0, 't'},
                                            {"size", required_argument, 0, 's'}, {"gaussians", required_argument, 0, 'n'},
                                            {"iteration", no_argument, 0, 'I'}, {"iters", required_argument, 0, 'i'},
+                                           {"unfused", no_argument, 0, 'U'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0, iteration = 0;
+  int quick = 0, iteration = 0, unfused = 0;
   long iters = 50;
   long threads = 0, one_size = 0, one_n = 0;
   optind = 1;
@@ -350,6 +360,7 @@ int mgs_bench_raster(int argc, char **argv) {
     switch (c) {
     case 'q': quick = 1; break;
     case 'I': iteration = 1; break;
+    case 'U': unfused = 1; break;
     case 'i':
       iters = strtol(optarg, &end, 10);
       if (*end || iters < 1 || iters > 100000) { fprintf(stderr, "morsegs bench raster: bad --iters '%s'\n", optarg); return 2; }
@@ -375,14 +386,16 @@ int mgs_bench_raster(int argc, char **argv) {
              "  --size S --gaussians N  one case only (SxS image, N Gaussians)\n"
              "  --iteration  a whole training iteration instead (forward, L1+D-SSIM, backward, Adam; SH 3)\n"
              "               split by phase, wall and CPU ms; default 200x200, 100k Gaussians\n"
-             "  --iters N    iterations timed by --iteration (50)\n");
+             "  --iters N    iterations timed by --iteration (50)\n"
+             "  --unfused    --iteration with the backward and Adam as separate passes (as the trainer on\n"
+             "               densification steps)\n");
       return 0;
     default: fprintf(stderr, "morsegs bench raster: bad option %s (see --help)\n", argv[optind - 1]); return 2;
     }
   }
   if (optind < argc) { fprintf(stderr, "morsegs bench raster: unexpected argument '%s'\n", argv[optind]); return 2; }
   if (threads > 0) mgs_parallel_set_threads((int)threads);
-  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters);
+  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused);
   int nthr = mgs_parallel_max_threads();
   const char *isa = "";
   double peak = measure_peak(&isa);

@@ -90,6 +90,20 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
                                const float *dL_ddepth, mgs_gaussians *grad, float *grad_mean2d,
                                mgs_error *err);
 
+/* The same backward with the per-Gaussian gradients handed out block by block instead of
+ * added into a gradient model (so that an optimizer step can consume them while they are
+ * in cache: they never reach memory). `sink` is called once for each block [first,
+ * first + count) of a partition of the n Gaussians, concurrently from worker threads and
+ * in no particular order, with the block's gradients as rows 0..count-1 of `block`
+ * (SH-rest coefficients beyond the forward's degree and all of culled Gaussians are zero;
+ * valid during the call only). `model` must be the forward's model. Nothing reads a block's rows of the forward's model after
+ * its sink call, so the sink may update them; another backward then needs a new forward.
+ * Values identical to mgs_raster_backward into zeroed gradients. */
+typedef void (*mgs_raster_grad_sink)(void *ctx, size_t first, size_t count, const mgs_gaussians *block);
+mgs_status mgs_raster_backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                    const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                    mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

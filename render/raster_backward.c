@@ -66,16 +66,22 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
   for (int i = 0; i < 16; i++) xs[i] = (float)(x0 + i) + 0.5f;
   const v16f amax = v16f_set1(MGS_ALPHA_MAX), amin = v16f_set1(MGS_ALPHA_MIN);
   const v16f one = v16f_set1(1.0f), zero = v16f_set1(0.0f);
+  v16f fac = one;
+  fac[GS_A] = -0.5f; fac[GS_B2] = -1.0f; fac[GS_C] = -0.5f;
   /* Gaussians behind every pixel's last contributor get zero slots */
-  for (uint32_t j = start + (uint32_t)maxn; j < end; j++) memset(r->isect_grad + (size_t)r->isect_slot[j] * GS_N, 0, GS_N * sizeof(float));
+  for (uint32_t j = start + (uint32_t)maxn; j < end; j++) v16f_store(r->isect_grad + (size_t)r->isect_slot[j] * GS_STRIDE, zero);
   uint32_t evals = 0;
   for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
-    if (j >= start + 8) __builtin_prefetch(r->isect_grad + (size_t)r->isect_slot[j - 8] * GS_N, 1); /* random slot */
-    const mgs_splat *sp = &r->isect_splat[j];
-    float *out = r->isect_grad + (size_t)r->isect_slot[j] * GS_N;
+    if (j >= start + 8) { /* random slot and splat: fetch ahead */
+      __builtin_prefetch(r->isect_grad + (size_t)r->isect_slot[j - 8] * GS_STRIDE, 1);
+      const char *nx = (const char *)&r->splat[r->isect_idx[j - 8]];
+      __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_splat) - 1);
+    }
+    const mgs_splat *sp = &r->splat[r->isect_idx[j]];
+    float *out = r->isect_grad + (size_t)r->isect_slot[j] * GS_STRIDE;
     int lo, hi;
     mgs_row_range(sp, y0, nrows, &lo, &hi);
-    if (hi < lo) { memset(out, 0, GS_N * sizeof(float)); continue; }
+    if (hi < lo) { v16f_store(out, zero); continue; }
     v16f dx = xs - v16f_set1(sp->u);
     v16f op = v16f_set1(sp->opacity);
     v16f A = v16f_set1(sp->A), B = v16f_set1(sp->B), C = v16f_set1(sp->C);
@@ -115,9 +121,12 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
       ac[GS_B2] = v16f_fma(gG, dx * dy, ac[GS_B2]);
       ac[GS_C] = v16f_fma(gG, dy * dy, ac[GS_C]);
     }
-    for (int c = 0; c < GS_N; c++) out[c] = v16f_sum(ac[c]);
+    /* one horizontal sum each (a transposing reduction tree would be cheaper but rounds
+       differently, and training is chaotic enough to amplify that into other results) */
+    v16f sums = zero;
+    for (int c = 0; c < GS_N; c++) sums[c] = v16f_sum(ac[c]);
     /* dG/dA = -G dx^2/2, dG/dB = -G dx dy, dG/dC = -G dy^2/2 */
-    out[GS_A] *= -0.5f; out[GS_B2] = -out[GS_B2]; out[GS_C] *= -0.5f;
+    v16f_store(out, sums * fac); /* lanes from GS_N on are 0 */
   }
   r->tile_evals[tile] = evals;
 }
@@ -136,11 +145,10 @@ void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const floa
   r->evals_bwd = ev * 16.0;
 }
 
-/* Per binned Gaussian, in index order (sequential over the model arrays): sum its
- * intersection slots, then the projection backward. Each Gaussian is touched by one call
- * only, so no atomics. */
-static void reduce_range(void *ctx, size_t b, size_t e) {
-  const bwd_ctx *bc = ctx;
+/* Per binned Gaussian of [b, e), in index order (sequential over the model arrays): sum its
+ * intersection slots, then the projection backward into grad (row 0 = Gaussian gbase).
+ * Each Gaussian is touched by one call only, so no atomics. */
+static void reduce_span(const bwd_ctx *bc, size_t b, size_t e, mgs_gaussians *grad, size_t gbase) {
   mgs_raster *r = bc->r;
   uint32_t idx[16];
   float gsum[GS_N][16];
@@ -150,42 +158,114 @@ static void reduce_range(void *ctx, size_t b, size_t e) {
     if (!cnt) continue;
     /* the SH backward addresses lanes relative to the first: keep the spread small */
     if (nl && i - idx[0] >= (1u << 24)) {
-      mgs_raster_project_backward16(r, idx, nl, gsum, bc->grad, bc->grad_mean2d);
+      mgs_raster_project_backward16(r, idx, nl, gsum, grad, gbase, bc->grad_mean2d);
       nl = 0;
     }
-    float gs[GS_N] = {0};
-    const float *q = r->isect_grad + (size_t)r->gauss_off[i] * GS_N;
-    for (uint32_t s = 0; s < cnt; s++, q += GS_N)
-      for (int c = 0; c < GS_N; c++) gs[c] += q[c];
+    v16f acc = v16f_set1(0.0f);
+    const float *q = r->isect_grad + (size_t)r->gauss_off[i] * GS_STRIDE;
+    for (uint32_t s = 0; s < cnt; s++, q += GS_STRIDE) acc += v16f_load(q);
+    /* hidden behind every pixel's last contributor or too faint everywhere: the chain
+     * would only push zeros (its gradients stay 0, as its 2D-mean gradient norm) */
+    if (!v16i_any(((v16i)acc << 1) != 0)) continue;
+    float gs[16];
+    v16f_store(gs, acc);
     idx[nl] = (uint32_t)i;
     for (int c = 0; c < GS_N; c++) gsum[c][nl] = gs[c];
     if (++nl == 16) {
-      mgs_raster_project_backward16(r, idx, nl, gsum, bc->grad, bc->grad_mean2d);
+      mgs_raster_project_backward16(r, idx, nl, gsum, grad, gbase, bc->grad_mean2d);
       nl = 0;
     }
   }
-  if (nl) mgs_raster_project_backward16(r, idx, nl, gsum, bc->grad, bc->grad_mean2d);
+  if (nl) mgs_raster_project_backward16(r, idx, nl, gsum, grad, gbase, bc->grad_mean2d);
+}
+
+static void reduce_range(void *ctx, size_t b, size_t e) {
+  const bwd_ctx *bc = ctx;
+  reduce_span(bc, b, e, bc->grad, 0);
+}
+
+/* Gaussians per block handed to a sink: the block's gradients (59 floats a Gaussian,
+ * 15 KB) stay in L1 between the backward writing and the sink reading them. */
+#define SINK_BLOCK 64
+enum { SINK_FLOATS = 3 + 3 + 4 + 1 + 3 + MGS_SH_REST_MAX };
+
+typedef struct sink_run {
+  bwd_ctx bc;
+  mgs_raster_grad_sink sink;
+  void *sink_ctx;
+} sink_run;
+
+static void sink_range(void *ctx, size_t bb, size_t be) {
+  const sink_run *sc = ctx;
+  const mgs_raster *r = sc->bc.r;
+  _Alignas(64) float buf[SINK_BLOCK * SINK_FLOATS];
+  mgs_gaussians blk;
+  memset(&blk, 0, sizeof blk);
+  blk.capacity = SINK_BLOCK;
+  blk.sh_degree = r->g->sh_degree;
+  blk.mean = buf;
+  blk.log_scale = blk.mean + 3 * SINK_BLOCK;
+  blk.rot = blk.log_scale + 3 * SINK_BLOCK;
+  blk.opacity = blk.rot + 4 * SINK_BLOCK;
+  blk.sh_dc = blk.opacity + SINK_BLOCK;
+  blk.sh_rest = blk.sh_dc + 3 * SINK_BLOCK;
+  for (size_t k = bb; k < be; k++) {
+    size_t b = k * SINK_BLOCK, e = b + SINK_BLOCK < r->n ? b + SINK_BLOCK : r->n;
+    blk.n = e - b;
+    memset(buf, 0, sizeof buf);
+    reduce_span(&sc->bc, b, e, &blk, b);
+    sc->sink(sc->sink_ctx, b, e - b, &blk);
+  }
+}
+
+static mgs_status backward_check(const mgs_raster *r, const float *dL_dcolor, mgs_error *err) {
+  if (!r || !dL_dcolor)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: NULL argument");
+  if (!r->have_forward)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: backward called without a successful forward");
+  return MGS_OK;
+}
+
+/* The per-tile part, then the per-Gaussian part (fn over work items [0, units)), both
+ * timed. */
+static void backward_run(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha, const float *dL_ddepth,
+                         float *grad_mean2d, size_t units, size_t grain, mgs_range_fn fn, void *ctx) {
+  if (grad_mean2d) memset(grad_mean2d, 0, r->n * sizeof(float));
+  double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
+  mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
+  double t1 = mgs_now(), c1 = mgs_raster_cpu_now();
+  mgs_parallel_for(0, units, grain, fn, ctx);
+  r->prof.tiles_ms = (t1 - t0) * 1e3;
+  r->prof.reduce_ms = (mgs_now() - t1) * 1e3;
+  r->prof.tiles_cpu = (c1 - c0) * 1e3;
+  r->prof.reduce_cpu = (mgs_raster_cpu_now() - c1) * 1e3;
 }
 
 mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
                                const float *dL_ddepth, mgs_gaussians *grad, float *grad_mean2d,
                                mgs_error *err) {
-  if (!r || !dL_dcolor || !grad)
-    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: NULL argument");
-  if (!r->have_forward)
-    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: backward called without a successful forward");
+  mgs_status st = backward_check(r, dL_dcolor, err);
+  if (st != MGS_OK) return st;
+  if (!grad) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: NULL argument");
   if (grad->n != r->n || grad->sh_degree < r->s.sh_degree)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: gradient model has %zu Gaussians (SH %d), "
                          "the forward had %zu (SH %d)", grad->n, grad->sh_degree, r->n, r->s.sh_degree);
-  if (grad_mean2d) memset(grad_mean2d, 0, r->n * sizeof(float));
-  double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
-  mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
-  double t1 = mgs_now(), c1 = mgs_raster_cpu_now();
   bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, grad, grad_mean2d};
-  mgs_parallel_for(0, r->n, 1024, reduce_range, &bc);
-  r->prof.tiles_ms = (t1 - t0) * 1e3;
-  r->prof.reduce_ms = (mgs_now() - t1) * 1e3;
-  r->prof.tiles_cpu = (c1 - c0) * 1e3;
-  r->prof.reduce_cpu = (mgs_raster_cpu_now() - c1) * 1e3;
+  backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, r->n, 1024, reduce_range, &bc);
+  return MGS_OK;
+}
+
+mgs_status mgs_raster_backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                    const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                    mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err) {
+  mgs_status st = backward_check(r, dL_dcolor, err);
+  if (st != MGS_OK) return st;
+  if (!sink || !model) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: NULL argument");
+  if (model != r->g || model->n != r->n)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: the model is not the forward's (%zu Gaussians, "
+                         "the forward had %zu)", model->n, r->n);
+  sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx};
+  backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range, &sc);
+  r->have_forward = 0; /* the sink may have changed the model: another backward needs a new forward */
   return MGS_OK;
 }

@@ -140,18 +140,15 @@ static void tile_scatter(void *ctx, size_t kb, size_t ke) {
       if (j + 16 < e) { /* depth order is random in memory: fetch ahead */
         uint32_t ga = r->vis_idx[j + 16];
         __builtin_prefetch(r->rect + 4 * (size_t)ga);
-        __builtin_prefetch(&r->splat[ga]);
-        __builtin_prefetch((const char *)&r->splat[ga] + 47);
         __builtin_prefetch(&r->gauss_off[ga]);
       }
       uint32_t gi = r->vis_idx[j];
       const uint16_t *rc = r->rect + 4 * (size_t)gi;
       uint32_t s = r->gauss_off[gi];
-      const mgs_splat *sp = &r->splat[gi];
       for (int ty = rc[1]; ty < rc[3]; ty++)
         for (int tx = rc[0]; tx < rc[2]; tx++) {
           uint32_t pos = off[(size_t)ty * r->tiles_x + tx]++;
-          r->isect_splat[pos] = *sp;
+          r->isect_idx[pos] = gi;
           r->isect_slot[pos] = s++;
         }
     }

@@ -24,7 +24,7 @@ mgs_raster *mgs_raster_create(void) { return calloc(1, sizeof(mgs_raster)); }
 static void free_all(mgs_raster *r) {
   free(r->splat); free(r->aux); free(r->radii); free(r->rect); free(r->count);
   free(r->vis_key); free(r->vis_idx); free(r->tmp_key); free(r->tmp_idx); free(r->gauss_off);
-  free(r->isect_splat); free(r->isect_slot); free(r->isect_grad);
+  free(r->isect_idx); free(r->isect_slot); free(r->isect_grad);
   free(r->tile_start); free(r->chunk_cnt); free(r->tile_evals);
   free(r->out_color); free(r->out_alpha); free(r->out_depth); free(r->final_T); free(r->n_contrib);
 }
@@ -85,8 +85,10 @@ mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *er
     if (c > UINT32_MAX - 1) c = n_isect;
     /* the backward's per-intersection gradient slots are allocated here too, so the
      * first backward does not allocate */
-    if (!grow((void **)&r->isect_splat, c, sizeof(mgs_splat)) || !grow((void **)&r->isect_slot, c, sizeof(uint32_t)) ||
-        !grow((void **)&r->isect_grad, c, GS_N * sizeof(float)))
+    free(r->isect_grad);
+    r->isect_grad = aligned_alloc(64, c * GS_STRIDE * sizeof(float));
+    if (!grow((void **)&r->isect_idx, c, sizeof(uint32_t)) || !grow((void **)&r->isect_slot, c, sizeof(uint32_t)) ||
+        !r->isect_grad)
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_context.c: out of memory for %zu tile intersections", n_isect);
     r->cap_isect = c;
   }

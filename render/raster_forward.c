@@ -1,5 +1,6 @@
 /* The forward: projection, binning, then per-tile front-to-back compositing, parallel
- * over tiles. Inside a tile the 256 pixels are 16 rows of 16-wide vectors; each Gaussian
+ * over tiles. Inside a tile the 256 pixels are 16 rows of 16-wide vectors (8-wide half rows
+ * for a Gaussian whose pixels all lie in one half of the tile); each Gaussian
  * of the tile's depth-sorted list is evaluated only on the rows its alpha >= 1/255
  * ellipse reaches and whose pixels have not all terminated, and the tile stops when all
  * have (identical result to evaluating everything, as the reference does). */
@@ -34,6 +35,39 @@ static inline __attribute__((always_inline)) int fwd_row(const mgs_splat *sp, v1
   return 1;
 }
 
+#if defined(MGS_HALF_ROWS)
+/* fwd_row on half h of the row (the other half gets nothing from this Gaussian). */
+static inline __attribute__((always_inline)) int fwd_row8(const mgs_splat *sp, v8f dx, v8f op, v8f cr, v8f cg, v8f cb,
+                                                           v8f cz, v8i jid, int y0, int y, int h, v16f *T, v16f *C0,
+                                                           v16f *C1, v16f *C2, v16f *D, v16i *NC, v16i *DONE,
+                                                           int *rowdone) {
+  if (rowdone[y]) return 0;
+  const v8f amax = v8f_set1(MGS_ALPHA_MAX), amin = v8f_set1(MGS_ALPHA_MIN), tmin = v8f_set1(MGS_T_MIN);
+  const v8f one = v8f_set1(1.0f), zero = v8f_set1(0.0f);
+  float dy = (float)(y0 + y) + 0.5f - sp->v;
+  v8f power = mgs_row_power8(sp, dx, dy);
+  v8f alpha = v8f_min(amax, op * v8f_exp_neg(power));
+  v8i done = v8i_half(&DONE[y], h);
+  v8i m = (power <= zero) & (alpha >= amin) & ~done;
+  v8f Ty = v8f_half(&T[y], h);
+  v8f testT = Ty * (one - alpha);
+  v8i nd = m & (testT < tmin);
+  if (v8i_any(nd)) {
+    v8i_put(&DONE[y], h, done | nd);
+    rowdone[y] = !v16i_any(~DONE[y]);
+  }
+  m &= ~nd;
+  v8f w = v8f_and(m, alpha * Ty);
+  v8f_put(&C0[y], h, v8f_fma(w, cr, v8f_half(&C0[y], h)));
+  v8f_put(&C1[y], h, v8f_fma(w, cg, v8f_half(&C1[y], h)));
+  v8f_put(&C2[y], h, v8f_fma(w, cb, v8f_half(&C2[y], h)));
+  v8f_put(&D[y], h, v8f_fma(w, cz, v8f_half(&D[y], h)));
+  v8f_put(&T[y], h, v8f_select(m, testT, Ty));
+  v8i_put(&NC[y], h, (m & jid) | (~m & v8i_half(&NC[y], h)));
+  return 1;
+}
+#endif
+
 static void render_tile(mgs_raster *r, size_t tile) {
   const int W = r->width, H = r->height;
   int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
@@ -56,20 +90,40 @@ static void render_tile(mgs_raster *r, size_t tile) {
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
   uint32_t evals = 0;
   for (uint32_t j = start; j < end; j++) {
-    const mgs_splat *sp = &r->isect_splat[j];
+    if (j + 8 < end) { /* the splats are gathered: fetch ahead */
+      const char *nx = (const char *)&r->splat[r->isect_idx[j + 8]];
+      __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_splat) - 1);
+    }
+    const mgs_splat *sp = &r->splat[r->isect_idx[j]];
     int lo, hi;
     mgs_row_range(sp, y0, nrows, &lo, &hi);
-    v16f dx = xs - v16f_set1(sp->u);
-    v16f op = v16f_set1(sp->opacity);
-    v16f cr = v16f_set1(sp->rgb[0]), cg = v16f_set1(sp->rgb[1]), cb = v16f_set1(sp->rgb[2]), cz = v16f_set1(sp->z);
-    v16i jid = v16i_set1((int32_t)(j - start + 1));
-    /* two rows per step: their exp() chains are independent and overlap */
     int y = lo;
-    for (; y < hi; y += 2) {
-      evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y, T, C0, C1, C2, D, NC, DONE, rowdone);
-      evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y + 1, T, C0, C1, C2, D, NC, DONE, rowdone);
+#if defined(MGS_HALF_ROWS)
+    int h = mgs_col_half(sp, x0);
+    if (h >= 0) { /* every pixel it can reach is in one half of the tile */
+      v8f dx = v8f_half(&xs, h) - v8f_set1(sp->u);
+      v8f op = v8f_set1(sp->opacity);
+      v8f cr = v8f_set1(sp->rgb[0]), cg = v8f_set1(sp->rgb[1]), cb = v8f_set1(sp->rgb[2]), cz = v8f_set1(sp->z);
+      v8i jid = v8i_set1((int32_t)(j - start + 1));
+      for (; y < hi; y += 2) {
+        evals += (uint32_t)fwd_row8(sp, dx, op, cr, cg, cb, cz, jid, y0, y, h, T, C0, C1, C2, D, NC, DONE, rowdone);
+        evals += (uint32_t)fwd_row8(sp, dx, op, cr, cg, cb, cz, jid, y0, y + 1, h, T, C0, C1, C2, D, NC, DONE, rowdone);
+      }
+      if (y == hi) evals += (uint32_t)fwd_row8(sp, dx, op, cr, cg, cb, cz, jid, y0, y, h, T, C0, C1, C2, D, NC, DONE, rowdone);
+    } else
+#endif
+    {
+      v16f dx = xs - v16f_set1(sp->u);
+      v16f op = v16f_set1(sp->opacity);
+      v16f cr = v16f_set1(sp->rgb[0]), cg = v16f_set1(sp->rgb[1]), cb = v16f_set1(sp->rgb[2]), cz = v16f_set1(sp->z);
+      v16i jid = v16i_set1((int32_t)(j - start + 1));
+      /* two rows per step: their exp() chains are independent and overlap */
+      for (; y < hi; y += 2) {
+        evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y, T, C0, C1, C2, D, NC, DONE, rowdone);
+        evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y + 1, T, C0, C1, C2, D, NC, DONE, rowdone);
+      }
+      if (y == hi) evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y, T, C0, C1, C2, D, NC, DONE, rowdone);
     }
-    if (y == hi) evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y, T, C0, C1, C2, D, NC, DONE, rowdone);
     /* every 32 Gaussians: stop when every pixel of the tile has terminated */
     if (((j - start) & 31) == 31) {
       v16i all = DONE[0];

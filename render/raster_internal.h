@@ -6,8 +6,8 @@
 #include <stdint.h>
 #include "render/mgs_raster.h"
 
-/* What the tile kernels need of one projected Gaussian (48 bytes; copied into every tile
- * list it belongs to by the binning). */
+/* What the tile kernels need of one projected Gaussian (48 bytes; gathered through the
+ * tile lists' Gaussian indices). */
 typedef struct mgs_splat {
   float u, v;          /* screen mean, pixels (pixel centres at +0.5) */
   float A, B, C;       /* conic = inverse 2D covariance: power = -(A dx^2 + 2B dx dy + C dy^2)/2 */
@@ -15,25 +15,25 @@ typedef struct mgs_splat {
   float rgb[3];        /* SH colour, clamped at 0 */
   float z;             /* camera depth */
   float ry;            /* half height (px) of the region where opacity*G >= 1/255 */
-  float pad;
+  float rx;            /* its half width */
 } mgs_splat;
 
-/* Per-Gaussian data the backward needs beyond the splat (kept from the forward rather
- * than recomputed: exp, quaternion normalization and the Jacobian are not free). */
+/* Per-Gaussian data the backward needs beyond the splat and the parameters (what the
+ * double-precision parts of the forward computed; the float rotation, scales and Jacobian
+ * are recomputed bit for bit by the same code instead, cheaper than 80 more bytes a
+ * Gaussian written and read back). */
 typedef struct mgs_proj_aux {
-  float R[9];          /* rotation of the normalized quaternion */
-  float s[3];          /* scales (modifier applied) */
-  float T0[3], T1[3];  /* rows of J W, the 2x3 map of the EWA projection */
   float t[3];          /* camera-space mean (float, after the double transform) */
-  float txc, tyc;      /* t.x, t.y after the Jacobian's x/z, y/z clamp */
   float dir[3];        /* unit view direction (world), for the SH backward */
   float dist;          /* |mean - camera centre| */
   uint8_t clamped[3];  /* colour channel clamped at 0 */
-  uint8_t clampx, clampy; /* the Jacobian's x/z, y/z clamp was active */
 } mgs_proj_aux;
 
 /* Sum over one tile's pixels of the gradient w.r.t. one splat's values. */
 enum { GS_R, GS_G, GS_B, GS_Z, GS_OP, GS_U, GS_V, GS_A, GS_B2, GS_C, GS_N };
+/* Floats per intersection gradient slot: one aligned cache line (the slots are written in
+ * random order; a 44-byte slot would straddle two lines most of the time). */
+#define GS_STRIDE 16
 
 struct mgs_raster {
   /* the forward this context belongs to */
@@ -59,11 +59,12 @@ struct mgs_raster {
 
   /* intersections (capacity cap_isect) */
   size_t n_isect, cap_isect;
-  mgs_splat *isect_splat;  /* copy of the splat of each (tile, depth)-sorted intersection, so
-                              the tile kernels stream through memory instead of gathering */
+  uint32_t *isect_idx;     /* Gaussian of each (tile, depth)-sorted intersection (the tile
+                              kernels gather its splat with prefetching: cheaper than copying
+                              48 bytes into every tile list, a scattered write) */
   uint32_t *isect_slot;    /* per intersection: its gradient slot, gauss_off[i] + (j-th tile of
                               Gaussian i), so the per-Gaussian pass reads its slots in order */
-  float *isect_grad;       /* GS_N floats per intersection (backward) */
+  float *isect_grad;       /* GS_STRIDE floats per intersection (backward), 64-byte aligned */
 
   /* per tile */
   size_t cap_tiles;
@@ -85,7 +86,7 @@ struct mgs_raster {
 /* raster_project.c */
 void mgs_raster_project_all(mgs_raster *r);
 void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, float gsum[GS_N][16],
-                                   mgs_gaussians *grad, float *grad_mean2d);
+                                   mgs_gaussians *grad, size_t gbase, float *grad_mean2d);
 /* raster_sh.c */
 void mgs_sh_eval(int deg, const float *dc, const float *rest, const float dir[3], float rgb[3]);
 /* dL_drgb: gradient w.r.t. the unclamped colour. Adds into dc, rest, returns dL/ddir. */

@@ -23,4 +23,23 @@ MGS_VINLINE void mgs_row_range(const mgs_splat *sp, int y0, int nrows, int *lo, 
   int h = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
   *lo = l; *hi = h;
 }
+#if defined(MGS_HALF_ROWS)
+MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
+  float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;
+  return v8f_fma(v8f_fma(v8f_set1(-0.5f * sp->A), dx, v8f_set1(bdy)), dx, v8f_set1(hc));
+}
+#endif
+
+/* The half of a tile (first column 0 or 8) holding every column of the tile starting at
+ * pixel column x0 that can hold contributions of sp (|pixel centre - u| <= rx), or -1. */
+MGS_VINLINE int mgs_col_half(const mgs_splat *sp, int x0) {
+#if defined(MGS_HALF_ROWS)
+  float a = sp->u - sp->rx - 0.5f - (float)x0, b = sp->u + sp->rx - 0.5f - (float)x0;
+  if (b < 8.0f) return 0;
+  if (a > 7.0f) return 8;
+#else
+  (void)sp; (void)x0;
+#endif
+  return -1;
+}
 #endif

@@ -19,44 +19,72 @@ static void jacobian_limits(const mgs_camera *cam, float lx[2], float ly[2]) {
   ly[1] = (float)((cam->height - cam->cy) / cam->fy + 0.3 * hy);
 }
 
-static int clamp_tile(double v, int hi) {
-  if (!(v > 0)) return 0;
-  if (v > hi) return hi;
-  return (int)v;
+/* 8 doubles (the projection's double-precision parts, 8 lanes of a block at a time). */
+typedef double v8d __attribute__((vector_size(64)));
+typedef int64_t v8l __attribute__((vector_size(64)));
+MGS_VINLINE v8d v8d_set1(double x) { return (v8d){x, x, x, x, x, x, x, x}; }
+MGS_VINLINE v8d v8d_load(const double *p) { v8d v; memcpy(&v, p, sizeof v); return v; }
+MGS_VINLINE void v8d_store(double *p, v8d v) { memcpy(p, &v, sizeof v); }
+MGS_VINLINE v8d v8d_from_float(const float *p) { v8f v; memcpy(&v, p, sizeof v); return __builtin_convertvector(v, v8d); }
+MGS_VINLINE void v8d_to_float(float *p, v8d v) { v8f f = __builtin_convertvector(v, v8f); memcpy(p, &f, sizeof f); }
+MGS_VINLINE void v8i_store(int *p, v8i v) { memcpy(p, &v, sizeof v); }
+MGS_VINLINE v8d v8d_select(v8l m, v8d a, v8d b) { return (v8d)((m & (v8l)a) | (~m & (v8l)b)); }
+MGS_VINLINE v8d v8d_and(v8l m, v8d a) { return (v8d)(m & (v8l)a); }
+MGS_VINLINE v8l v8d_finite(v8d x) { return (x - x) == v8d_set1(0.0); }
+MGS_VINLINE v8d v8d_sqrt(v8d x) {
+#if defined(__AVX512F__)
+  return (v8d)_mm512_sqrt_pd((__m512d)x);
+#else
+  v8d r;
+  for (int i = 0; i < 8; i++) r[i] = sqrt(x[i]);
+  return r;
+#endif
+}
+MGS_VINLINE v8d v8d_floor(v8d x) {
+#if defined(__AVX512F__)
+  return (v8d)_mm512_roundscale_pd((__m512d)x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+#else
+  v8d r;
+  for (int i = 0; i < 8; i++) r[i] = floor(x[i]);
+  return r;
+#endif
+}
+/* A tile coordinate: 0 below (and for NaN), hi above, else truncated; 8 lanes. */
+MGS_VINLINE v8i clamp_tile8(v8d v, v8d hi) {
+  v8d c = v8d_select(v > hi, hi, v8d_and(v > v8d_set1(0.0), v));
+  return __builtin_convertvector(c, v8i);
 }
 
-typedef struct proj_ctx {
-  mgs_raster *r;
-  float W[9];
-  float lx[2], ly[2];
-  double campos[3];
-} proj_ctx;
+/* What the geometric part of the projection needs of the camera and settings. */
+typedef struct geom_par {
+  float W[9];          /* world->camera rotation */
+  float lx[2], ly[2];  /* the Jacobian's x/z, y/z clamp */
+  float fx, fy, smod;
+} geom_par;
 
-static void cull(mgs_raster *r, size_t i) {
-  r->radii[i] = 0;
-  r->count[i] = 0;
+static void geom_par_init(const mgs_raster *r, geom_par *gp) {
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++) gp->W[3 * a + b] = (float)r->cam.w2c[4 * a + b];
+  jacobian_limits(&r->cam, gp->lx, gp->ly);
+  gp->fx = (float)r->cam.fx; gp->fy = (float)r->cam.fy;
+  gp->smod = r->s.scale_modifier;
 }
 
-/* Gaussians are projected 16 at a time: the per-Gaussian scalar parts (the double
- * world->camera transform, culling, the tile rectangle, SH) run per lane, the float
- * covariance algebra in between runs as 16-wide vectors. */
-typedef struct proj_block {
-  int n;                                  /* lanes in use */
-  int alive[16];
-  double td[3][16];                       /* camera-space mean, double */
-  float q[4][16], ls[3][16], logit[16];   /* parameters */
-  float tx[16], ty[16], tz[16];
-  /* results of the vector part */
-  float R[9][16], s[3][16], T0[3][16], T1[3][16];
-  float a[16], b[16], c[16], det[16], A[16], B[16], C[16], radius[16], op[16], txc[16], tyc[16];
-  int32_t clx[16], cly[16];
-} proj_block;
+/* Rotation, scales and the 2x3 EWA map J W of 16 lanes. */
+typedef struct proj_geom {
+  float R[9][16], s[3][16], T0[3][16], T1[3][16], txc[16], tyc[16];
+  int32_t clx[16], cly[16];  /* the Jacobian's x/z, y/z clamp was active */
+} proj_geom;
 
-static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
-  const mgs_raster *r = pc->r;
+/* proj_geom of 16 lanes from their quaternions, log-scales and camera-space means. Not
+ * inlined: the backward recomputes the forward's exact values through this same code
+ * rather than the forward storing them (80 bytes a Gaussian written and read back). */
+__attribute__((noinline)) static void proj_geom16(const geom_par *gp, const float q[4][16], const float ls[3][16],
+                                                  const float tx_[16], const float ty_[16], const float tz_[16],
+                                                  proj_geom *o) {
   const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f);
   /* rotation of the normalized quaternion (identity for a zero one, as mgs_quat_to_mat3f) */
-  v16f w = v16f_load(pb->q[0]), x = v16f_load(pb->q[1]), y = v16f_load(pb->q[2]), z = v16f_load(pb->q[3]);
+  v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
   v16f n2 = w * w + x * x + y * y + z * z;
   v16i nz = n2 > zero;
   v16f inv = one / v16f_sqrt(v16f_select(nz, n2, one));
@@ -66,8 +94,60 @@ static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
   R[0] = one - two * (y * y + z * z); R[1] = two * (x * y - w * z); R[2] = two * (x * z + w * y);
   R[3] = two * (x * y + w * z); R[4] = one - two * (x * x + z * z); R[5] = two * (y * z - w * x);
   R[6] = two * (x * z - w * y); R[7] = two * (y * z + w * x); R[8] = one - two * (x * x + y * y);
-  v16f sv[3];
-  for (int k = 0; k < 3; k++) sv[k] = v16f_set1(r->s.scale_modifier) * v16f_exp(v16f_load(pb->ls[k]));
+  for (int k = 0; k < 9; k++) v16f_store(o->R[k], R[k]);
+  for (int k = 0; k < 3; k++) v16f_store(o->s[k], v16f_set1(gp->smod) * v16f_exp(v16f_load(ls[k])));
+  /* Jacobian with the reference's clamp */
+  v16f fx = v16f_set1(gp->fx), fy = v16f_set1(gp->fy);
+  v16f tx = v16f_load(tx_), ty = v16f_load(ty_), tz = v16f_load(tz_);
+  v16f iz = one / tz;
+  v16f txtz = tx * iz, tytz = ty * iz;
+  v16f lx0 = v16f_set1(gp->lx[0]), lx1 = v16f_set1(gp->lx[1]), ly0 = v16f_set1(gp->ly[0]), ly1 = v16f_set1(gp->ly[1]);
+  v16i_store(o->clx, (txtz < lx0) | (txtz > lx1));
+  v16i_store(o->cly, (tytz < ly0) | (tytz > ly1));
+  v16f txc = v16f_min(v16f_max(txtz, lx0), lx1) * tz, tyc = v16f_min(v16f_max(tytz, ly0), ly1) * tz;
+  v16f J00 = fx * iz, J02 = v16f_set1(-1.0f) * fx * txc * iz * iz, J11 = fy * iz, J12 = v16f_set1(-1.0f) * fy * tyc * iz * iz;
+  const float *W = gp->W;
+  for (int j = 0; j < 3; j++) {
+    v16f_store(o->T0[j], J00 * v16f_set1(W[j]) + J02 * v16f_set1(W[6 + j]));
+    v16f_store(o->T1[j], J11 * v16f_set1(W[3 + j]) + J12 * v16f_set1(W[6 + j]));
+  }
+  v16f_store(o->txc, txc); v16f_store(o->tyc, tyc);
+}
+
+typedef struct proj_ctx {
+  mgs_raster *r;
+  geom_par gp;
+  double campos[3];
+} proj_ctx;
+
+static void cull(mgs_raster *r, size_t i) {
+  r->radii[i] = 0;
+  r->count[i] = 0;
+}
+
+/* Gaussians are projected 16 at a time: the float covariance algebra and SH run as 16-wide
+ * vectors, the double-precision parts (screen position, tile rectangles, view direction)
+ * as two 8-wide ones; per lane remain the double world->camera transform, the culling
+ * decisions and the stores. */
+typedef struct proj_block {
+  int n;                                  /* lanes in use */
+  int alive[16];
+  double td[3][16];                       /* camera-space mean, double */
+  float q[4][16], ls[3][16], logit[16];   /* parameters */
+  float tx[16], ty[16], tz[16];
+  /* results of the vector part */
+  proj_geom geo;
+  float a[16], b[16], c[16], det[16], A[16], B[16], C[16], radius[16], op[16];
+} proj_block;
+
+static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f);
+  proj_geom16(&pc->gp, pb->q, pb->ls, pb->tx, pb->ty, pb->tz, &pb->geo);
+  v16f R[9], sv[3], T0[3], T1[3];
+  for (int k = 0; k < 9; k++) R[k] = v16f_load(pb->geo.R[k]);
+  for (int k = 0; k < 3; k++) {
+    sv[k] = v16f_load(pb->geo.s[k]); T0[k] = v16f_load(pb->geo.T0[k]); T1[k] = v16f_load(pb->geo.T1[k]);
+  }
   v16f M[9];
   for (int a = 0; a < 3; a++)
     for (int k = 0; k < 3; k++) M[3 * a + k] = R[3 * a + k] * sv[k];
@@ -77,29 +157,13 @@ static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
   v16f S3 = M[3] * M[3] + M[4] * M[4] + M[5] * M[5];
   v16f S4 = M[3] * M[6] + M[4] * M[7] + M[5] * M[8];
   v16f S5 = M[6] * M[6] + M[7] * M[7] + M[8] * M[8];
-  /* Jacobian with the reference's clamp */
-  v16f fx = v16f_set1((float)r->cam.fx), fy = v16f_set1((float)r->cam.fy);
-  v16f tx = v16f_load(pb->tx), ty = v16f_load(pb->ty), tz = v16f_load(pb->tz);
-  v16f iz = one / tz;
-  v16f txtz = tx * iz, tytz = ty * iz;
-  v16f lx0 = v16f_set1(pc->lx[0]), lx1 = v16f_set1(pc->lx[1]), ly0 = v16f_set1(pc->ly[0]), ly1 = v16f_set1(pc->ly[1]);
-  v16i_store(pb->clx, (txtz < lx0) | (txtz > lx1));
-  v16i_store(pb->cly, (tytz < ly0) | (tytz > ly1));
-  v16f txc = v16f_min(v16f_max(txtz, lx0), lx1) * tz, tyc = v16f_min(v16f_max(tytz, ly0), ly1) * tz;
-  v16f J00 = fx * iz, J02 = v16f_set1(-1.0f) * fx * txc * iz * iz, J11 = fy * iz, J12 = v16f_set1(-1.0f) * fy * tyc * iz * iz;
-  const float *W = pc->W;
-  v16f T0[3], T1[3];
-  for (int j = 0; j < 3; j++) {
-    T0[j] = J00 * v16f_set1(W[j]) + J02 * v16f_set1(W[6 + j]);
-    T1[j] = J11 * v16f_set1(W[3 + j]) + J12 * v16f_set1(W[6 + j]);
-  }
   v16f ST00 = S0 * T0[0] + S1 * T0[1] + S2 * T0[2];
   v16f ST01 = S1 * T0[0] + S3 * T0[1] + S4 * T0[2];
   v16f ST02 = S2 * T0[0] + S4 * T0[1] + S5 * T0[2];
   v16f ST10 = S0 * T1[0] + S1 * T1[1] + S2 * T1[2];
   v16f ST11 = S1 * T1[0] + S3 * T1[1] + S4 * T1[2];
   v16f ST12 = S2 * T1[0] + S4 * T1[1] + S5 * T1[2];
-  v16f dil = v16f_set1(r->s.dilation);
+  v16f dil = v16f_set1(pc->r->s.dilation);
   v16f a = T0[0] * ST00 + T0[1] * ST01 + T0[2] * ST02 + dil;
   v16f b = T0[0] * ST10 + T0[1] * ST11 + T0[2] * ST12;
   v16f c = T1[0] * ST10 + T1[1] * ST11 + T1[2] * ST12 + dil;
@@ -109,12 +173,9 @@ static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
   v16f l1 = mid + v16f_sqrt(v16f_max(v16f_set1(0.1f), mid * mid - det));
   v16f radius = v16f_ceil(v16f_set1(3.0f) * v16f_sqrt(v16f_max(l1, zero)));
   v16f op = one / (one + v16f_exp(zero - v16f_load(pb->logit)));
-  for (int k = 0; k < 9; k++) v16f_store(pb->R[k], R[k]);
-  for (int k = 0; k < 3; k++) { v16f_store(pb->s[k], sv[k]); v16f_store(pb->T0[k], T0[k]); v16f_store(pb->T1[k], T1[k]); }
   v16f_store(pb->a, a); v16f_store(pb->b, b); v16f_store(pb->c, c); v16f_store(pb->det, det);
   v16f_store(pb->A, c * idet); v16f_store(pb->B, zero - b * idet); v16f_store(pb->C, a * idet);
   v16f_store(pb->radius, radius); v16f_store(pb->op, op);
-  v16f_store(pb->txc, txc); v16f_store(pb->tyc, tyc);
 }
 
 static void project_block(const proj_ctx *pc, size_t i0, int nl) {
@@ -124,14 +185,23 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   const double *V = cam->w2c;
   proj_block pb;
   pb.n = nl;
-  /* lane setup: double transform, early culling, parameters (unused lanes benign) */
+  /* the double world->camera transform, 8 lanes at a time (unused lanes: the mean at the
+     camera centre) */
+  double md[3][16], tdl[3][16];
+  for (int l = 0; l < 16; l++)
+    for (int k = 0; k < 3; k++) md[k][l] = l < nl ? (double)g->mean[3 * (i0 + (size_t)l) + k] : pc->campos[k];
+  for (int h = 0; h < 16; h += 8) {
+    v8d m0 = v8d_load(md[0] + h), m1 = v8d_load(md[1] + h), m2 = v8d_load(md[2] + h);
+    for (int k = 0; k < 3; k++)
+      v8d_store(tdl[k] + h, v8d_set1(V[4 * k]) * m0 + v8d_set1(V[4 * k + 1]) * m1 + v8d_set1(V[4 * k + 2]) * m2 + v8d_set1(V[4 * k + 3]));
+  }
+  /* lane setup: early culling, parameters (unused lanes benign) */
   for (int l = 0; l < 16; l++) {
     size_t i = i0 + (size_t)l;
     int ok = l < nl;
     double td[3] = {0, 0, 1};
     if (ok) {
-      double m[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]};
-      for (int k = 0; k < 3; k++) td[k] = V[4 * k] * m[0] + V[4 * k + 1] * m[1] + V[4 * k + 2] * m[2] + V[4 * k + 3];
+      for (int k = 0; k < 3; k++) td[k] = tdl[k][l];
       const float *qq = g->rot + 4 * i;
       /* a diverged parameter culls the Gaussian (scales and SH are caught below) */
       ok = td[2] > r->s.near_plane && isfinite(td[0]) && isfinite(td[1]) && isfinite(td[2]) &&
@@ -152,39 +222,41 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   float dirl[3][16], distl[16], rgbl[3][16];
   int32_t lane[16];
   uint16_t shmask = 0;
-  for (int l = 0; l < 16; l++) {
-    lane[l] = 0;
-    dirl[0][l] = dirl[1][l] = dirl[2][l] = 0;
+  for (int l = 0; l < 16; l++) lane[l] = 0;
+  /* the double-precision parts 8 lanes at a time (unused and dead lanes hold benign
+     values: camera-space mean (0, 0, 1), mean at the camera centre) */
+  int32_t finite[16];
+  for (int h = 0; h < 16; h += 8) {
+    const v8d fx = v8d_set1(cam->fx), fy = v8d_set1(cam->fy), cx = v8d_set1(cam->cx), cy = v8d_set1(cam->cy);
+    v8d izd = v8d_set1(1.0) / v8d_load(pb.td[2] + h);
+    v8d ud = fx * v8d_load(pb.td[0] + h) * izd + cx, vd = fy * v8d_load(pb.td[1] + h) * izd + cy;
+    v8d rad = v8d_from_float(pb.radius + h);
+    v8l fin = v8d_finite(ud) & v8d_finite(vd) & v8d_finite(rad) & v8d_finite(v8d_from_float(pb.A + h)) &
+              v8d_finite(v8d_from_float(pb.B + h)) & v8d_finite(v8d_from_float(pb.C + h));
+    for (int l = 0; l < 8; l++) finite[h + l] = fin[l] != 0;
+    v8d_store(udl + h, ud); v8d_store(vdl + h, vd);
+    /* the reference's getRect, in its pixel coordinates (centres at integers) */
+    v8d px = ud - v8d_set1(0.5), py = vd - v8d_set1(0.5), ts = v8d_set1(1.0 / MGS_TILE_SIZE);
+    v8d tsz = v8d_set1(MGS_TILE_SIZE), one = v8d_set1(1.0), tx = v8d_set1(r->tiles_x), ty = v8d_set1(r->tiles_y);
+    v8i_store(rect[0] + h, clamp_tile8((px - rad) * ts, tx));
+    v8i_store(rect[1] + h, clamp_tile8((py - rad) * ts, ty));
+    v8i_store(rect[2] + h, clamp_tile8((px + rad + tsz - one) * ts, tx));
+    v8i_store(rect[3] + h, clamp_tile8((py + rad + tsz - one) * ts, ty));
+    /* view direction in double (far-from-origin scenes) */
+    v8d dd[3];
+    for (int k = 0; k < 3; k++) dd[k] = v8d_load(md[k] + h) - v8d_set1(pc->campos[k]);
+    v8d dist = v8d_sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+    v8l pos = dist > v8d_set1(0.0);
+    v8d id = v8d_set1(1.0) / v8d_select(pos, dist, v8d_set1(1.0));
+    for (int k = 0; k < 3; k++) v8d_to_float(dirl[k] + h, v8d_and(pos, dd[k] * id));
+    v8d_to_float(distl + h, dist);
   }
   for (int l = 0; l < nl; l++) {
     if (!pb.alive[l]) continue;
     size_t i = i0 + (size_t)l;
-    float det = pb.det[l], radius = pb.radius[l];
-    float A = pb.A[l], B = pb.B[l], C = pb.C[l];
-    if (!(det > 0) || !isfinite(det)) { cull(r, i); continue; }
-    double td[3] = {pb.td[0][l], pb.td[1][l], pb.td[2][l]};
-    double izd = 1.0 / td[2];
-    double ud = cam->fx * td[0] * izd + cam->cx, vd = cam->fy * td[1] * izd + cam->cy;
-    if (!isfinite(ud) || !isfinite(vd) || !isfinite(radius) || !isfinite(A) || !isfinite(B) || !isfinite(C)) {
-      cull(r, i); continue;
-    }
-    /* the reference's getRect, in its pixel coordinates (centres at integers) */
-    double px = ud - 0.5, py = vd - 0.5;
-    int x0 = clamp_tile((px - radius) / MGS_TILE_SIZE, r->tiles_x);
-    int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) / MGS_TILE_SIZE, r->tiles_x);
-    int y0 = clamp_tile((py - radius) / MGS_TILE_SIZE, r->tiles_y);
-    int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) / MGS_TILE_SIZE, r->tiles_y);
-    if ((x1 - x0) * (y1 - y0) == 0) { cull(r, i); continue; }
-    udl[l] = ud; vdl[l] = vd;
-    rect[0][l] = x0; rect[1][l] = y0; rect[2][l] = x1; rect[3][l] = y1;
-    /* view direction in double (far-from-origin scenes) */
-    double dd[3] = {g->mean[3 * i] - pc->campos[0], g->mean[3 * i + 1] - pc->campos[1], g->mean[3 * i + 2] - pc->campos[2]};
-    double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
-    if (dist > 0) {
-      double id = 1.0 / dist;
-      for (int k = 0; k < 3; k++) dirl[k][l] = (float)(dd[k] * id);
-    }
-    distl[l] = (float)dist;
+    float det = pb.det[l];
+    if (!(det > 0) || !isfinite(det) || !finite[l]) { cull(r, i); continue; }
+    if ((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]) == 0) { cull(r, i); continue; }
     lane[l] = l;
     shmask |= (uint16_t)(1u << l);
   }
@@ -202,15 +274,13 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
     for (int k = 0; k < 3; k++) rgbl[k][l] = c3[k];
   }
 #endif
-  /* per lane, part 2 */
+  /* per lane, part 2: splat and aux; which lanes are binned */
+  float r2l[16];
+  uint16_t binmask = 0;
+  for (int l = 0; l < 16; l++) r2l[l] = 0;
   for (int l = 0; l < nl; l++) {
     if (!(shmask & (1u << l))) continue;
     size_t i = i0 + (size_t)l;
-    float a = pb.a[l], c = pb.c[l];
-    float A = pb.A[l], B = pb.B[l], C = pb.C[l];
-    double ud = udl[l], vd = vdl[l];
-    int x0 = rect[0][l], y0 = rect[1][l], x1 = rect[2][l], y1 = rect[3][l];
-    float radius = pb.radius[l];
     float op = pb.op[l];
     mgs_proj_aux *ax = &r->aux[i];
     mgs_splat *sp = &r->splat[i];
@@ -221,35 +291,48 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
       ax->dir[k] = dirl[k][l];
     }
     if (!isfinite(sp->rgb[0]) || !isfinite(sp->rgb[1]) || !isfinite(sp->rgb[2])) { cull(r, i); continue; }
-    float dist = distl[l];
-    ax->dist = dist;
+    ax->dist = distl[l];
     ax->t[0] = pb.tx[l]; ax->t[1] = pb.ty[l]; ax->t[2] = pb.tz[l];
-    ax->txc = pb.txc[l]; ax->tyc = pb.tyc[l];
-    for (int k = 0; k < 9; k++) ax->R[k] = pb.R[k][l];
-    for (int k = 0; k < 3; k++) { ax->s[k] = pb.s[k][l]; ax->T0[k] = pb.T0[k][l]; ax->T1[k] = pb.T1[k][l]; }
-    ax->clampx = (uint8_t)(pb.clx[l] != 0); ax->clampy = (uint8_t)(pb.cly[l] != 0);
-    sp->u = (float)ud; sp->v = (float)vd;
-    sp->A = A; sp->B = B; sp->C = C;
+    sp->u = (float)udl[l]; sp->v = (float)vdl[l];
+    sp->A = pb.A[l]; sp->B = pb.B[l]; sp->C = pb.C[l];
     sp->opacity = op;
     sp->z = pb.tz[l];
-    r->radii[i] = (int)radius;
-
-    /* Tighter, equivalent binning: outside the ellipse where opacity*G >= 1/255 nothing
-     * is drawn, so tiles of the reference rect that miss its bounding box are dropped.
-     * Conservative margins keep the result identical to evaluating the whole rect. */
-    if (op < MGS_ALPHA_MIN) { r->count[i] = 0; sp->ry = 0; continue; }
-    float r2 = 2.0f * logf(op / MGS_ALPHA_MIN);
-    float hx = sqrtf(r2 * a), hy = sqrtf(r2 * c);
-    float mx = 1e-3f * hx + 0.02f, my = 1e-3f * hy + 0.02f;
-    int bx0 = clamp_tile(floor((ud - hx - 0.5 - mx) / MGS_TILE_SIZE), r->tiles_x);
-    int bx1 = clamp_tile(floor((ud + hx - 0.5 + mx) / MGS_TILE_SIZE) + 1, r->tiles_x);
-    int by0 = clamp_tile(floor((vd - hy - 0.5 - my) / MGS_TILE_SIZE), r->tiles_y);
-    int by1 = clamp_tile(floor((vd + hy - 0.5 + my) / MGS_TILE_SIZE) + 1, r->tiles_y);
-    if (bx0 > x0) x0 = bx0;
-    if (bx1 < x1) x1 = bx1;
-    if (by0 > y0) y0 = by0;
-    if (by1 < y1) y1 = by1;
-    sp->ry = hy + my;
+    r->radii[i] = (int)pb.radius[l];
+    if (op < MGS_ALPHA_MIN) { r->count[i] = 0; sp->ry = sp->rx = 0; continue; }
+    r2l[l] = 2.0f * logf(op / MGS_ALPHA_MIN);
+    binmask |= (uint16_t)(1u << l);
+  }
+  if (!binmask) return;
+  /* Tighter, equivalent binning: outside the ellipse where opacity*G >= 1/255 nothing is
+   * drawn, so tiles of the reference rect that miss its bounding box are dropped.
+   * Conservative margins keep the result identical to evaluating the whole rect. */
+  float hxl[16], mxl[16], hyl[16], myl[16];
+  int brect[4][16];
+  {
+    v16f r2 = v16f_load(r2l);
+    v16f hx = v16f_sqrt(r2 * v16f_load(pb.a)), hy = v16f_sqrt(r2 * v16f_load(pb.c));
+    v16f mx = v16f_set1(1e-3f) * hx + v16f_set1(0.02f), my = v16f_set1(1e-3f) * hy + v16f_set1(0.02f);
+    v16f_store(hxl, hx); v16f_store(hyl, hy); v16f_store(mxl, mx); v16f_store(myl, my);
+    for (int h = 0; h < 16; h += 8) {
+      v8d ud = v8d_load(udl + h), vd = v8d_load(vdl + h), half = v8d_set1(0.5), one = v8d_set1(1.0);
+      v8d hxd = v8d_from_float(hxl + h), hyd = v8d_from_float(hyl + h), mxd = v8d_from_float(mxl + h), myd = v8d_from_float(myl + h);
+      v8d ts = v8d_set1(1.0 / MGS_TILE_SIZE), tx = v8d_set1(r->tiles_x), ty = v8d_set1(r->tiles_y);
+      v8i_store(brect[0] + h, clamp_tile8(v8d_floor((ud - hxd - half - mxd) * ts), tx));
+      v8i_store(brect[2] + h, clamp_tile8(v8d_floor((ud + hxd - half + mxd) * ts) + one, tx));
+      v8i_store(brect[1] + h, clamp_tile8(v8d_floor((vd - hyd - half - myd) * ts), ty));
+      v8i_store(brect[3] + h, clamp_tile8(v8d_floor((vd + hyd - half + myd) * ts) + one, ty));
+    }
+  }
+  for (int l = 0; l < nl; l++) {
+    if (!(binmask & (1u << l))) continue;
+    size_t i = i0 + (size_t)l;
+    int x0 = rect[0][l], y0 = rect[1][l], x1 = rect[2][l], y1 = rect[3][l];
+    if (brect[0][l] > x0) x0 = brect[0][l];
+    if (brect[2][l] < x1) x1 = brect[2][l];
+    if (brect[1][l] > y0) y0 = brect[1][l];
+    if (brect[3][l] < y1) y1 = brect[3][l];
+    r->splat[i].ry = hyl[l] + myl[l];
+    r->splat[i].rx = hxl[l] + mxl[l];
     if (x1 <= x0 || y1 <= y0) { r->count[i] = 0; continue; }
     uint16_t *rc = r->rect + 4 * i;
     rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
@@ -268,9 +351,7 @@ static void project_range(void *ctx, size_t b, size_t e) {
 void mgs_raster_project_all(mgs_raster *r) {
   proj_ctx pc;
   pc.r = r;
-  for (int a = 0; a < 3; a++)
-    for (int b = 0; b < 3; b++) pc.W[3 * a + b] = (float)r->cam.w2c[4 * a + b];
-  jacobian_limits(&r->cam, pc.lx, pc.ly);
+  geom_par_init(r, &pc.gp);
   mgs_camera_center(&r->cam, pc.campos);
   mgs_parallel_for(0, (r->n + 15) / 16, 64, project_range, &pc); /* blocks of 16 */
 }
@@ -278,32 +359,31 @@ void mgs_raster_project_all(mgs_raster *r) {
 /* Backward of the projection for up to 16 binned Gaussians at once: idx[0..nl) their
  * indices, gsum[c][l] the tile kernels' summed gradient c of lane l. The geometric chain
  * (conic -> 2D covariance -> Sigma, J, camera-space mean -> scales, quaternion, mean) runs
- * 16-wide; the SH backward and the additions into grad run per lane. Adds into grad. */
+ * 16-wide; the SH backward and the additions into grad run per lane. Adds into grad, whose
+ * row 0 is Gaussian gbase (a block's gradients, or the whole model's with gbase 0). */
 void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, float gsum[GS_N][16],
-                                   mgs_gaussians *grad, float *grad_mean2d) {
+                                   mgs_gaussians *grad, size_t gbase, float *grad_mean2d) {
   const mgs_gaussians *g = r->g;
   const mgs_camera *cam = &r->cam;
-  float Rl[9][16], sl[3][16], T0l[3][16], T1l[3][16], tl[3][16], txcl[16], tycl[16], Kl[3][16], ql[4][16];
-  int32_t clxl[16], clyl[16];
+  float tl[3][16], Kl[3][16], ql[4][16], lsl[3][16];
   for (int l = 0; l < 16; l++) {
     int ok = l < nl;
     size_t i = ok ? idx[l] : idx[0];
     const mgs_proj_aux *ax = &r->aux[i];
     const mgs_splat *sp = &r->splat[i];
-    for (int k = 0; k < 9; k++) Rl[k][l] = ax->R[k];
-    for (int k = 0; k < 3; k++) {
-      sl[k][l] = ax->s[k]; T0l[k][l] = ax->T0[k]; T1l[k][l] = ax->T1[k]; tl[k][l] = ax->t[k];
-    }
-    txcl[l] = ax->txc; tycl[l] = ax->tyc;
-    clxl[l] = ax->clampx ? -1 : 0; clyl[l] = ax->clampy ? -1 : 0;
+    for (int k = 0; k < 3; k++) { tl[k][l] = ax->t[k]; lsl[k][l] = g->log_scale[3 * i + k]; }
     Kl[0][l] = sp->A; Kl[1][l] = sp->B; Kl[2][l] = sp->C;
     for (int k = 0; k < 4; k++) ql[k][l] = g->rot[4 * i + k];
     if (!ok) for (int c = 0; c < GS_N; c++) gsum[c][l] = 0;
   }
-  float W[9];
-  for (int a = 0; a < 3; a++)
-    for (int b = 0; b < 3; b++) W[3 * a + b] = (float)cam->w2c[4 * a + b];
-  const float fx = (float)cam->fx, fy = (float)cam->fy;
+  /* the forward's R, s, J W exactly, recomputed (binned Gaussians were projected with
+     their own parameters, as here) */
+  geom_par gp;
+  geom_par_init(r, &gp);
+  proj_geom geo;
+  proj_geom16(&gp, ql, lsl, tl[0], tl[1], tl[2], &geo);
+  const float *W = gp.W;
+  const float fx = gp.fx, fy = gp.fy;
   const v16f zero = v16f_set1(0.0f);
 
   /* conic -> 2D covariance: dL/dcov = -K G K */
@@ -315,8 +395,8 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
   v16f C01 = zero - (KG00 * K01 + KG01 * K11);
   v16f C11 = zero - (KG10 * K01 + KG11 * K11);
   v16f T0[3], T1[3], R[9], s[3], M[9];
-  for (int k = 0; k < 3; k++) { T0[k] = v16f_load(T0l[k]); T1[k] = v16f_load(T1l[k]); s[k] = v16f_load(sl[k]); }
-  for (int k = 0; k < 9; k++) R[k] = v16f_load(Rl[k]);
+  for (int k = 0; k < 3; k++) { T0[k] = v16f_load(geo.T0[k]); T1[k] = v16f_load(geo.T1[k]); s[k] = v16f_load(geo.s[k]); }
+  for (int k = 0; k < 9; k++) R[k] = v16f_load(geo.R[k]);
   for (int a = 0; a < 3; a++)
     for (int k = 0; k < 3; k++) M[3 * a + k] = R[3 * a + k] * s[k];
   v16f Sg[9];
@@ -341,8 +421,8 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
   v16f dJ11 = dT1[0] * W[3] + dT1[1] * W[4] + dT1[2] * W[5];
   v16f dJ12 = dT1[0] * W[6] + dT1[1] * W[7] + dT1[2] * W[8];
   v16f tx = v16f_load(tl[0]), ty = v16f_load(tl[1]), tz = v16f_load(tl[2]);
-  v16f txc = v16f_load(txcl), tyc = v16f_load(tycl);
-  v16i clx = v16i_load(clxl), cly = v16i_load(clyl);
+  v16f txc = v16f_load(geo.txc), tyc = v16f_load(geo.tyc);
+  v16i clx = v16i_load(geo.clx), cly = v16i_load(geo.cly);
   v16f iz = 1.0f / tz, iz2 = iz * iz, iz3 = iz2 * iz;
   v16f dt0 = zero, dt1 = zero, dt2 = zero - fx * iz2 * dJ00 - fy * iz2 * dJ11;
   /* J02 = -fx*txc/z^2 with txc = x (free) or lim*z (clamped) */
@@ -404,14 +484,14 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
 #if defined(__AVX512F__)
   /* lanes are relative to idx[0] (the caller keeps the spread below 2^31 / 45) */
   mgs_sh_backward16(r->s.sh_degree, g->sh_rest + (size_t)MGS_SH_REST_MAX * idx[0], lane, (uint16_t)((1u << nl) - 1), dirl, drgb,
-                    grad->sh_dc + 3 * (size_t)idx[0], grad->sh_rest + (size_t)MGS_SH_REST_MAX * idx[0], ddir);
+                    grad->sh_dc + 3 * (idx[0] - gbase), grad->sh_rest + (size_t)MGS_SH_REST_MAX * (idx[0] - gbase), ddir);
 #else
   (void)lane;
   for (int l = 0; l < nl; l++) {
     size_t i = idx[l];
     float d3[3] = {dirl[0][l], dirl[1][l], dirl[2][l]}, g3[3] = {drgb[0][l], drgb[1][l], drgb[2][l]}, o3[3];
     mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, d3, g3,
-                    grad->sh_dc + 3 * i, grad->sh_rest + (size_t)MGS_SH_REST_MAX * i, o3);
+                    grad->sh_dc + 3 * (i - gbase), grad->sh_rest + (size_t)MGS_SH_REST_MAX * (i - gbase), o3);
     for (int k = 0; k < 3; k++) ddir[k][l] = o3[k];
   }
 #endif
@@ -425,10 +505,11 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
       float dd = ax->dir[0] * ddir[0][l] + ax->dir[1] * ddir[1][l] + ax->dir[2] * ddir[2][l];
       for (int k = 0; k < 3; k++) dmean[k] += (ddir[k][l] - ax->dir[k] * dd) / ax->dist;
     }
-    for (int k = 0; k < 3; k++) grad->mean[3 * i + k] += dmean[k];
-    grad->opacity[i] += gsum[GS_OP][l] * sp->opacity * (1.0f - sp->opacity);
-    for (int k = 0; k < 3; k++) grad->log_scale[3 * i + k] += dls[k][l];
-    for (int k = 0; k < 4; k++) grad->rot[4 * i + k] += dq[k][l];
+    size_t gi = i - gbase;
+    for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dmean[k];
+    grad->opacity[gi] += gsum[GS_OP][l] * sp->opacity * (1.0f - sp->opacity);
+    for (int k = 0; k < 3; k++) grad->log_scale[3 * gi + k] += dls[k][l];
+    for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += dq[k][l];
     if (grad_mean2d) grad_mean2d[i] = gm[l];
   }
 }

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "train/mgs_train.h"
+#include "train/adam_internal.h"
 #include "core/mgs_parallel.h"
 #if defined(__AVX512F__)
 #include <immintrin.h>
@@ -73,26 +74,19 @@ void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group) {
 
 /* One fused pass: every selected group's elements are cut into units of ADAM_UNIT floats
  * (whole rows for a partly active SH-rest group) and all units of all groups go through
- * one parallel loop. The element loop is written so the compiler vectorizes it (restrict
- * pointers, constants in locals, the finiteness test as arithmetic). */
+ * one parallel loop. */
 #define ADAM_UNIT 8192
-typedef struct {
-  float *p, *m, *v, *g;
-  float b1, b2, step_size, inv_sqrt_bc2, eps;
-  size_t row, used;   /* floats per row, of which the first `used` are updated */
-  size_t n_elem;      /* elements (used == row) or rows (partial) */
-  size_t unit0;       /* first unit of this group in the global numbering */
-  size_t per_unit;    /* elements or rows per unit */
-} adam_group;
 
 typedef struct {
-  adam_group grp[MGS_PARAM_COUNT];
+  mgs_adam_group grp[MGS_PARAM_COUNT];
   int n_grp;
   int zero_grad;
   atomic_int bad;     /* bit k: group k had a non-finite value */
 } step_ctx;
 
-static int step_span(const adam_group *c, size_t b, size_t e) {
+/* The element loop is written so the compiler vectorizes it (restrict pointers, constants
+ * in locals, the finiteness test as arithmetic). */
+int mgs_adam_span(const mgs_adam_group *c, size_t b, size_t e) {
   float *restrict P = c->p, *restrict M = c->m, *restrict V = c->v;
   const float *restrict G = c->g;
   const float b1 = c->b1, b2 = c->b2, ob1 = 1 - c->b1, ob2 = 1 - c->b2;
@@ -136,15 +130,15 @@ static void step_units(void *vc, size_t ub, size_t ue) {
   for (size_t u = ub; u < ue; u++) {
     int k = c->n_grp - 1;
     while (k > 0 && c->grp[k].unit0 > u) k--;
-    const adam_group *gp = &c->grp[k];
+    const mgs_adam_group *gp = &c->grp[k];
     size_t b = (u - gp->unit0) * gp->per_unit, e = b + gp->per_unit;
     if (e > gp->n_elem) e = gp->n_elem;
     int ub_bad = 0;
     if (gp->used == gp->row) {
-      ub_bad = step_span(gp, b, e);
+      ub_bad = mgs_adam_span(gp, b, e);
       if (c->zero_grad && !ub_bad) memset(gp->g + b, 0, (e - b) * sizeof(float));
     } else { /* b, e count rows */
-      for (size_t r = b; r < e; r++) ub_bad |= step_span(gp, r * gp->row, r * gp->row + gp->used);
+      for (size_t r = b; r < e; r++) ub_bad |= mgs_adam_span(gp, r * gp->row, r * gp->row + gp->used);
       if (c->zero_grad && !ub_bad)
         for (size_t r = b; r < e; r++) memset(gp->g + r * gp->row, 0, gp->used * sizeof(float));
     }
@@ -152,6 +146,34 @@ static void step_units(void *vc, size_t ub, size_t ue) {
     if (ub_bad) bad |= 1 << k;
   }
   if (bad) atomic_fetch_or(&c->bad, bad);
+}
+
+int mgs_adam_prepare(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad, unsigned group_mask,
+                     mgs_adam_group grp[MGS_PARAM_COUNT], int gid[MGS_PARAM_COUNT]) {
+  int n_grp = 0;
+  for (int gi = 0; gi < MGS_PARAM_COUNT; gi++) {
+    if (!(group_mask & (1u << gi))) continue;
+    mgs_param_group pg = (mgs_param_group)gi;
+    size_t d = (size_t)mgs_param_dim(pg);
+    a->t[gi]++;
+    double bc1 = 1.0 - pow(a->beta1, (double)a->t[gi]);
+    double bc2 = 1.0 - pow(a->beta2, (double)a->t[gi]);
+    mgs_adam_group *gp = &grp[n_grp];
+    memset(gp, 0, sizeof *gp);
+    gp->p = mgs_gaussians_group(model, pg);
+    gp->m = a->m[gi]; gp->v = a->v[gi];
+    gp->g = grad ? mgs_gaussians_group(grad, pg) : NULL;
+    gp->b1 = (float)a->beta1; gp->b2 = (float)a->beta2;
+    gp->step_size = (float)(a->lr[gi] / bc1);
+    gp->inv_sqrt_bc2 = (float)(1.0 / sqrt(bc2));
+    gp->eps = (float)a->eps;
+    gp->row = d;
+    gp->used = d;
+    if (pg == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) gp->used = 3 * (size_t)a->sh_rest_active;
+    if (gp->used == 0 || model->n == 0) continue;
+    gid[n_grp++] = gi;
+  }
+  return n_grp;
 }
 
 mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians *grad,
@@ -168,50 +190,37 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
   c.zero_grad = zero_grad;
   atomic_init(&c.bad, 0);
   int gid[MGS_PARAM_COUNT];
+  c.n_grp = mgs_adam_prepare(a, model, grad, group_mask, c.grp, gid);
   size_t units = 0;
-  for (int gi = 0; gi < MGS_PARAM_COUNT; gi++) {
-    if (!(group_mask & (1u << gi))) continue;
-    mgs_param_group grp = (mgs_param_group)gi;
-    size_t d = (size_t)mgs_param_dim(grp);
-    a->t[gi]++;
-    double bc1 = 1.0 - pow(a->beta1, (double)a->t[gi]);
-    double bc2 = 1.0 - pow(a->beta2, (double)a->t[gi]);
-    adam_group *gp = &c.grp[c.n_grp];
-    gp->p = mgs_gaussians_group(model, grp);
-    gp->m = a->m[gi]; gp->v = a->v[gi];
-    gp->g = mgs_gaussians_group(grad, grp);
-    gp->b1 = (float)a->beta1; gp->b2 = (float)a->beta2;
-    gp->step_size = (float)(a->lr[gi] / bc1);
-    gp->inv_sqrt_bc2 = (float)(1.0 / sqrt(bc2));
-    gp->eps = (float)a->eps;
-    gp->row = d;
-    gp->used = d;
-    if (grp == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) gp->used = 3 * (size_t)a->sh_rest_active;
-    if (gp->used == 0 || model->n == 0) continue;
-    if (gp->used == d) { gp->n_elem = model->n * d; gp->per_unit = ADAM_UNIT; }
-    else { gp->n_elem = model->n; gp->per_unit = ADAM_UNIT / d; }
+  for (int k = 0; k < c.n_grp; k++) {
+    mgs_adam_group *gp = &c.grp[k];
+    if (gp->used == gp->row) { gp->n_elem = model->n * gp->row; gp->per_unit = ADAM_UNIT; }
+    else { gp->n_elem = model->n; gp->per_unit = ADAM_UNIT / gp->row; }
     gp->unit0 = units;
     units += (gp->n_elem + gp->per_unit - 1) / gp->per_unit;
-    gid[c.n_grp++] = gi;
   }
   if (units) mgs_parallel_for(0, units, 1, step_units, &c);
   int bad = atomic_load(&c.bad);
   for (int k = 0; k < c.n_grp && bad; k++) {
     if (!(bad & (1 << k))) continue;
-    const adam_group *gp = &c.grp[k];
+    const mgs_adam_group *gp = &c.grp[k];
     mgs_param_group grp = (mgs_param_group)gid[k];
     size_t total = model->n * gp->row;
     for (size_t i = 0; i < total; i++) {
       if (i % gp->row >= gp->used) continue;
-      if (!isfinite(gp->g[i]))
-        return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite gradient in parameter group '%s' (Gaussian %zu)",
-                             mgs_param_name(grp), i / gp->row);
-      if (!isfinite(gp->p[i]))
-        return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite value in parameter group '%s' (Gaussian %zu) after the Adam step",
-                             mgs_param_name(grp), i / gp->row);
+      if (!isfinite(gp->g[i])) return mgs_adam_report(grp, i / gp->row, 0, err);
+      if (!isfinite(gp->p[i])) return mgs_adam_report(grp, i / gp->row, 1, err);
     }
   }
   return MGS_OK;
+}
+
+mgs_status mgs_adam_report(mgs_param_group group, size_t gaussian, int value, mgs_error *err) {
+  if (!value)
+    return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite gradient in parameter group '%s' (Gaussian %zu)",
+                         mgs_param_name(group), gaussian);
+  return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite value in parameter group '%s' (Gaussian %zu) after the Adam step",
+                       mgs_param_name(group), gaussian);
 }
 
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps) {

@@ -21,7 +21,8 @@ typedef struct mgs_strategy_step {
   int iteration;             /* 1-based, as the reference */
   mgs_gaussians *model;
   mgs_adam *adam;
-  const mgs_gaussians *grad; /* gradients of this iteration (model's n) */
+  const mgs_gaussians *grad; /* gradients of this iteration (model's n); NULL when the
+                                trainer runs backward and Adam fused (see `fusable`) */
   const float *grad_mean2d;  /* n: |dL/dmean2d| in NDC units, 0 when culled */
   const int *radii;          /* n: screen radius px, 0 when culled */
   int width, height;
@@ -40,6 +41,11 @@ typedef struct mgs_strategy_ops {
   mgs_status (*save)(void *self, FILE *f, mgs_error *err);
   mgs_status (*load)(void *self, FILE *f, size_t n_gaussians, mgs_error *err);
   void (*destroy)(void *self);
+  /* Optional: nonzero when post_backward of this iteration (s->iteration; s->grad NULL)
+   * reads only grad_mean2d and radii, neither the gradients nor the parameters, and
+   * replaces no group. The trainer then runs the backward and Adam fused, before the hook
+   * (which sees the stepped model). NULL: never. */
+  int (*fusable)(void *self, const mgs_strategy_step *s);
 } mgs_strategy_ops;
 
 typedef struct mgs_strategy {

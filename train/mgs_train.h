@@ -1,5 +1,6 @@
 /* The training layer (train/): it owns
- *   Adam over the model's parameter groups ........ mgs_adam_* (train/adam.c)
+ *   Adam over the model's parameter groups ........ mgs_adam_* (train/adam.c; fused with
+ *                                                   the backward: train/adam_backward.c)
  *   count changes that keep Adam in step .......... mgs_model_append / mgs_model_compact
  *   initial Gaussians (points or random) .......... mgs_init_* (train/init.c)
  *   the trainer loop, checkpoints, Ctrl-C ......... mgs_trainer_* (train/trainer.c,
@@ -20,6 +21,7 @@
 #include "core/mgs_gaussians.h"
 #include "core/mgs_dataset.h"
 #include "core/mgs_rng.h"
+#include "render/mgs_raster.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -61,6 +63,13 @@ mgs_status mgs_adam_step(mgs_adam *a, mgs_gaussians *model, const mgs_gaussians 
  * may be left as they were. */
 mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad,
                               unsigned group_mask, int zero_grad, mgs_error *err);
+/* The rasterizer's backward (of the last forward on r, which rendered `model`) and this
+ * Adam step in one pass, without gradient arrays: identical to mgs_raster_backward into
+ * zeroed gradients followed by mgs_adam_step (no gradient is ever 24 MB of memory
+ * traffic). grad_mean2d as mgs_raster_backward. Another backward on r needs a new forward. */
+mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                  const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                  unsigned group_mask, mgs_error *err);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);
@@ -140,7 +149,8 @@ const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
-/* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam. */
+/* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam (in 2
+ * on iterations where the two run fused). */
 #define MGS_TRAIN_PHASES 5
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
 /* Mean PSNR and SSIM over a split's views (images loaded on demand). */

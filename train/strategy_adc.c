@@ -170,6 +170,18 @@ static mgs_status adc_post(void *self, mgs_strategy_step *s, mgs_error *err) {
   return MGS_OK;
 }
 
+/* Outside densification and opacity-reset iterations the hook only accumulates
+ * grad_mean2d and radii (the same conditions as adc_post). */
+static int adc_fusable(void *self, const mgs_strategy_step *s) {
+  const mgs_adc_options *o = &((adc *)self)->o;
+  int it = s->iteration;
+  if (it >= o->densify_until) return 1;
+  if (it > o->densify_from && o->densify_every > 0 && it % o->densify_every == 0) return 0;
+  if ((o->opacity_reset_every > 0 && it % o->opacity_reset_every == 0) || (o->white_background && it == o->densify_from))
+    return 0;
+  return 1;
+}
+
 static mgs_status adc_save(void *self, FILE *f, mgs_error *err) {
   adc *a = self;
   uint64_t n = a->st.n;
@@ -202,7 +214,7 @@ static void adc_destroy(void *self) {
   free(a);
 }
 
-static const mgs_strategy_ops adc_ops = {"adc", adc_pre, adc_post, adc_save, adc_load, adc_destroy};
+static const mgs_strategy_ops adc_ops = {"adc", adc_pre, adc_post, adc_save, adc_load, adc_destroy, adc_fusable};
 
 mgs_strategy *mgs_strategy_adc_create(const mgs_adc_options *o) {
   mgs_strategy *s = calloc(1, sizeof *s);

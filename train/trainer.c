@@ -137,8 +137,14 @@ static mgs_status zero_grad(mgs_trainer *t, mgs_error *err) {
     else if (used)
       for (size_t i = 0; i < n; i++) memset(t->grad->sh_rest + i * MGS_SH_REST_MAX, 0, used * sizeof(float));
   }
-  /* gm2d is cleared by the backward */
-  return grow_floats(&t->gm2d, &t->gm_cap, n ? n : 1, err);
+  return MGS_OK;
+}
+
+/* An Adam error (it names the group) as the reason training stopped. */
+static mgs_status adam_stop(int it, mgs_error *err) {
+  char msg[MGS_ERROR_MSG_MAX];
+  snprintf(msg, sizeof msg, "%s", err ? err->msg : "non-finite value");
+  return mgs_error_set(err, MGS_ERR_NUMERIC, "training stopped at iteration %d: %s", it, msg);
 }
 
 /* Names the parameter group holding a non-finite value, else describes `what`. */
@@ -181,40 +187,47 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->ema_loss = it == 1 ? loss : 0.4 * loss + 0.6 * t->ema_loss;
   t->ema_psnr = it == 1 ? psnr : 0.4 * psnr + 0.6 * t->ema_psnr;
 
-  if ((st = zero_grad(t, err))) return st;
-  double t2 = mgs_now();
-  t->phase_s[1] += t2 - t1;
+  if ((st = grow_floats(&t->gm2d, &t->gm_cap, t->g->n ? t->g->n : 1, err))) return st; /* cleared by the backward */
   mgs_strategy_step ss;
   memset(&ss, 0, sizeof ss);
-  ss.iteration = it; ss.model = t->g; ss.adam = t->adam; ss.grad = t->grad;
+  ss.iteration = it; ss.model = t->g; ss.adam = t->adam;
   ss.grad_mean2d = t->gm2d; ss.radii = ro.radii; ss.width = ro.width; ss.height = ro.height;
   ss.extent = ext; ss.rng = &t->rng;
   int use_strategy = t->strategy && !o->freeze;
+  const unsigned all = (1u << MGS_PARAM_COUNT) - 1;
+  /* the reference does no optimizer step on the last iteration, and none on tensors the
+     strategy replaced in this one; when the strategy's hook needs neither the gradients nor
+     the unstepped model, the backward and the Adam step run fused (identical results) */
+  int step_opt = it < o->iterations && !o->freeze;
+  int fused = step_opt && (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
+  if (!fused) {
+    if ((st = zero_grad(t, err))) return st;
+    ss.grad = t->grad;
+  }
+  double t2 = mgs_now();
+  t->phase_s[1] += t2 - t1;
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if ((st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err))) return st;
+  if (fused) st = mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, err);
+  else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
+  if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
+  if (st) return st;
   double t3 = mgs_now();
   t->phase_s[2] += t3 - t2;
   if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
     return st;
-  /* the reference does no optimizer step on the last iteration, and none on tensors the
-     strategy replaced in this one */
   double t4 = mgs_now();
   t->phase_s[3] += t4 - t3;
-  unsigned mask = ((1u << MGS_PARAM_COUNT) - 1) & ~ss.replaced_groups;
-  if (it < o->iterations && !o->freeze && mask && t->g->n == t->grad->n) {
-    int all = mask == (1u << MGS_PARAM_COUNT) - 1;
-    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, all, err);
-    if (st == MGS_OK && all) {
+  unsigned mask = all & ~ss.replaced_groups;
+  if (step_opt && !fused && mask && t->g->n == t->grad->n) {
+    int whole = mask == all;
+    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, whole, err);
+    if (st == MGS_OK && whole) {
       t->grad_clean = 1;
       t->grad_clean_n = t->g->n;
       t->grad_clean_sh = t->adam->sh_rest_active;
     }
-    if (st == MGS_ERR_NUMERIC) {
-      char msg[MGS_ERROR_MSG_MAX];
-      snprintf(msg, sizeof msg, "%s", err ? err->msg : "non-finite value");
-      return mgs_error_set(err, MGS_ERR_NUMERIC, "training stopped at iteration %d: %s", it, msg);
-    }
+    if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
     if (st) return st;
   }
   t->iteration = it;

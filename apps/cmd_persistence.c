@@ -362,6 +362,21 @@ int mgs_cmd_persistence(int argc, char **argv) {
            construction == MGS_TOPO_V ? "V" : "T");
   printf("  pairs: H0 %zu, H1 %zu, H2 %zu (essential %zu, truncated by the band %zu)\n", per_dim[0], per_dim[1],
          per_dim[2], ess, trunc);
+  if (trunc && isfinite(stats.effective_w) && h > 0) {
+    /* Bars alive at the level are exact up to persistence w - |level|; longer ones need a
+     * wider band, which only a rebuild of the SDF can give. */
+    const double exact = stats.effective_w - fabs(level);
+    printf("  note: bars reaching the clamp: %zu (their true persistence may be longer); bars alive at %g are exact\n"
+           "        up to persistence %g; to resolve persistence P, rebuild the SDF with `morsegs vdb --band W`,\n"
+           "        W = floor((|level| + P) / %g) + 1 voxels\n",
+           trunc, level, exact > 0 ? exact : 0.0, h);
+  }
+  if (min_pers > 0 && isfinite(stats.effective_w) && h > 0 && !superlevel) {
+    const int need = mgs_topo_band_for_threshold(min_pers, level, h);
+    if (need < 0 || need * h > stats.effective_w * (1 + 1e-9))
+      printf("  warning: --min-persistence %g needs a band of %d voxels to be exact at %g; this grid's is %g voxels\n",
+             min_pers, need, level, stats.effective_w / h);
+  }
   printf("  Betti numbers at %s %g: b0=%d b1=%d b2=%d\n", superlevel ? "density >=" : "t =", level, betti[0], betti[1], betti[2]);
   printf("  cells: %zu in the band (%zu in the box), %zu critical after the discrete gradient (reduction %.1f %%)\n",
          stats.band_cells, stats.cells_total, stats.critical_cells, 100.0 * stats.reduction_ratio);

@@ -73,6 +73,15 @@ typedef struct mgs_topo_opts {
 
 void mgs_topo_opts_default(mgs_topo_opts *o); /* V, sublevel, w = inf, 0, 1, (0,0,0) */
 
+/* The band's clamp to [-w, w] keeps a bar exact only when both of its ends lie strictly
+ * inside. A bar alive at level t (birth <= t < death) with persistence p has both ends in
+ * [t - p, t + p], so every such bar with p <= max_persistence is exact when
+ * w > |t| + max_persistence. Returns that half-width in voxels: the smallest integer above
+ * (|t| + max_persistence) / voxel_size, at least 1; -1 for non-finite or non-positive input.
+ * Whoever thresholds persistence (the trainer's ε_sig and ε_p, `--min-persistence`) builds
+ * the SDF with at least this band (`morsegs vdb --band`) rather than a fixed 3 voxels. */
+int mgs_topo_band_for_threshold(double max_persistence, double level, double voxel_size);
+
 typedef struct mgs_topo_stats {
   size_t active_voxels;   /* voxels the engine looked at (dense: all; sparse: leaf voxels) */
   size_t leaves, tiles;   /* sparse input blocks */

@@ -203,10 +203,69 @@ static void test_bad_input(void) {
   mgs_diagram_destroy(d);
 }
 
+/* A band built for a persistence threshold keeps every bar alive at 0 with persistence up
+ * to it exact (same values, not truncated), as in the unclamped diagram; a band just short
+ * of the farthest end of those bars loses one of them. */
+static void test_band_for_threshold(void) {
+  CHECK(mgs_topo_band_for_threshold(0.0, 0.0, 1.0) == 1);
+  CHECK(mgs_topo_band_for_threshold(2.0, 0.0, 1.0) == 3);
+  CHECK(mgs_topo_band_for_threshold(2.5, -1.0, 0.5) == 8);
+  CHECK(mgs_topo_band_for_threshold(NAN, 0.0, 1.0) == -1 && mgs_topo_band_for_threshold(1.0, 0.0, 0.0) == -1 &&
+        mgs_topo_band_for_threshold(-1.0, 0.0, 1.0) == -1 && mgs_topo_band_for_threshold(1.0, INFINITY, 1.0) == -1);
+  /* white noise in [-1, 1]: many short bars around 0; h only scales the threshold */
+  const int N = full ? 28 : 16;
+  const double h = 0.05;
+  float *f = tt_field(TT_RANDOM, N, 5);
+  mgs_diagram *all = dense(f, N, INFINITY, 0);
+  for (int k = 2; all && k <= 4; k += 2) {
+    const double eps = k * h;
+    const int wv = mgs_topo_band_for_threshold(eps, 0.0, h);
+    mgs_diagram *c = dense(f, N, wv * h, 0);
+    size_t sel = 0, kept = 0;
+    double need = 0;
+    for (size_t i = 0; c && i < all->n; i++) {
+      const mgs_pair *p = &all->pairs[i];
+      if (!(p->birth <= 0 && p->death > 0 && isfinite(p->death) && p->death - p->birth <= eps)) continue;
+      sel++;
+      need = fmax(need, fmax(-p->birth, p->death));
+      for (size_t j = 0; j < c->n; j++)
+        if (c->pairs[j].dim == p->dim && c->pairs[j].birth == p->birth && c->pairs[j].death == p->death &&
+            !c->pairs[j].truncated) {
+          kept++;
+          break;
+        }
+    }
+    CHECK_MSG(sel > 0, "no bar alive at 0 below %g: the test would be vacuous", eps);
+    CHECK_MSG(kept == sel, "band %d voxels for threshold %g: %zu of %zu bars kept", wv, eps, kept, sel);
+    CHECK(need < wv * h);
+    printf("  threshold %g voxels: band %d voxels keeps %zu bars alive at 0 (farthest end %.2f voxels)\n", eps / h, wv,
+           sel, need / h);
+    mgs_diagram_destroy(c);
+    /* just short of the farthest end: that bar must change (clamped) or be flagged */
+    c = dense(f, N, 0.99 * need, 0);
+    size_t kept2 = 0;
+    for (size_t i = 0; c && i < all->n; i++) {
+      const mgs_pair *p = &all->pairs[i];
+      if (!(p->birth <= 0 && p->death > 0 && isfinite(p->death) && p->death - p->birth <= eps)) continue;
+      for (size_t j = 0; j < c->n; j++)
+        if (c->pairs[j].dim == p->dim && c->pairs[j].birth == p->birth && c->pairs[j].death == p->death &&
+            !c->pairs[j].truncated) {
+          kept2++;
+          break;
+        }
+    }
+    CHECK_MSG(kept2 < sel, "a band narrower than the farthest end kept all %zu bars", sel);
+    mgs_diagram_destroy(c);
+  }
+  mgs_diagram_destroy(all);
+  free(f);
+}
+
 int main(int argc, char **argv) {
   full = argc > 1 && !strcmp(argv[1], "full");
   RUN(test_betti);
   RUN(test_band_equals_dense);
+  RUN(test_band_for_threshold);
   RUN(test_fog_superlevel);
   RUN(test_bad_input);
   return mgs_test_finish();

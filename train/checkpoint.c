@@ -109,9 +109,9 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   if (fnv(1469598103934665603ull, data, size - 8) != sum)
     FAIL(MGS_ERR_FORMAT, "%s: checkpoint is truncated or corrupt (checksum mismatch)", path);
   reader r = {data + 8, size - 16};
-  uint32_t ver, bom;
+  uint32_t ver = 0, bom = 0;
   ckpt_header h;
-  rd(&r, &ver, 4); rd(&r, &bom, 4);
+  if (!rd(&r, &ver, 4) || !rd(&r, &bom, 4)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   if (bom != 0x01020304u) FAIL(MGS_ERR_FORMAT, "%s: checkpoint written on a machine of another byte order", path);
   if (ver != CKPT_VERSION) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
   if (!rd(&r, &h, sizeof h)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);

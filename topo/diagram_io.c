@@ -209,7 +209,7 @@ static int get_end(const cJSON *o, mgs_pair_end *e) {
     if (!cJSON_IsArray(pos) || cJSON_GetArraySize(pos) != 3) return 0;
     for (int k = 0; k < 3; k++) {
       const cJSON *c = cJSON_GetArrayItem(pos, k);
-      if (!cJSON_IsNumber(c)) return 0;
+      if (!cJSON_IsNumber(c) || !isfinite(c->valuedouble)) return 0; /* 1e999 parses as inf */
       e->pos[k] = c->valuedouble;
     }
   }
@@ -274,7 +274,7 @@ mgs_status mgs_diagram_read_json(const char *path, mgs_diagram **out, mgs_error 
     p.truncated = cJSON_IsTrue(tr);
     if (!get_end(cJSON_GetObjectItemCaseSensitive(it, "birth_cell"), &p.b) ||
         !get_end(cJSON_GetObjectItemCaseSensitive(it, "death_cell"), &p.d)) {
-      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: pair %zu: malformed birth_cell/death_cell (voxel: 3 integers, pos: 3 numbers, cell: id)", path, i);
+      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: pair %zu: malformed birth_cell/death_cell (voxel: 3 integers, pos: 3 finite numbers, cell: id)", path, i);
       break;
     }
     if ((st = mgs_diagram_push(d, &p, err)) != MGS_OK) break;

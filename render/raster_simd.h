@@ -97,25 +97,26 @@ MGS_VINLINE v16f v16f_ceil(v16f x) {
  * clamp keeps every product downstream far from denormals (whose microcode assists made
  * tiny Gaussians several times slower). Bit-identical in the forward and the backward,
  * which is what matters. */
-MGS_VINLINE v16f v16f_exp_neg(v16f x) {
-  x = v16f_max(x, v16f_set1(-12.0f));
-  /* round to nearest via the 1.5*2^23 trick (|x*log2e| < 126) */
-  const v16f magic = v16f_set1(12582912.0f);
-  v16f n = v16f_fma(x, v16f_set1(1.44269504088896341f), magic) - magic;
-  v16f r = v16f_fma(n, v16f_set1(-0.693359375f), x);
-  r = v16f_fma(n, v16f_set1(2.12194440e-4f), r);
-  v16f z = r * r;
-  v16f y = v16f_set1(1.9875691500E-4f);
-  y = v16f_fma(y, r, v16f_set1(1.3981999507E-3f));
-  y = v16f_fma(y, r, v16f_set1(8.3334519073E-3f));
-  y = v16f_fma(y, r, v16f_set1(4.1665795894E-2f));
-  y = v16f_fma(y, r, v16f_set1(1.6666665459E-1f));
-  y = v16f_fma(y, r, v16f_set1(5.0000001201E-1f));
-  y = v16f_fma(y, z, r + v16f_set1(1.0f));
-  v16i e = __builtin_convertvector(n, v16i);
-  v16i bits = (e + 127) << 23;
-  return y * (v16f)bits;
-}
+/* One body for the 16- and 8-lane versions, so that both stay the same operations. */
+#define MGS_EXP_NEG_BODY(VF, VI, SET1, MAX, FMA)                                  \
+  x = MAX(x, SET1(-12.0f));                                                       \
+  /* round to nearest via the 1.5*2^23 trick (|x*log2e| < 126) */                 \
+  const VF magic = SET1(12582912.0f);                                             \
+  VF n = FMA(x, SET1(1.44269504088896341f), magic) - magic;                      \
+  VF r = FMA(n, SET1(-0.693359375f), x);                                          \
+  r = FMA(n, SET1(2.12194440e-4f), r);                                            \
+  VF z = r * r;                                                                   \
+  VF y = SET1(1.9875691500E-4f);                                                  \
+  y = FMA(y, r, SET1(1.3981999507E-3f));                                          \
+  y = FMA(y, r, SET1(8.3334519073E-3f));                                          \
+  y = FMA(y, r, SET1(4.1665795894E-2f));                                          \
+  y = FMA(y, r, SET1(1.6666665459E-1f));                                          \
+  y = FMA(y, r, SET1(5.0000001201E-1f));                                          \
+  y = FMA(y, z, r + SET1(1.0f));                                                  \
+  VI e = __builtin_convertvector(n, VI);                                          \
+  VI bits = (e + 127) << 23;                                                      \
+  return y * (VF)bits;
+MGS_VINLINE v16f v16f_exp_neg(v16f x) { MGS_EXP_NEG_BODY(v16f, v16i, v16f_set1, v16f_max, v16f_fma) }
 /* ---- 8 lanes (half a tile row), for Gaussians whose pixels lie in one half of a tile
  * (cheaper where a 512-bit operation runs as two 256-bit halves, as on AMD Zen 4). The
  * same operations as the 16-wide versions lane for lane (identical results). */
@@ -137,24 +138,7 @@ MGS_VINLINE v8f v8f_max(v8f a, v8f b) { return v8f_select(a > b, a, b); }
 MGS_VINLINE v8f v8f_fma(v8f a, v8f b, v8f c) { return (v8f)_mm256_fmadd_ps((__m256)a, (__m256)b, (__m256)c); }
 MGS_VINLINE int v8i_any(v8i m) { return _mm256_test_epi32_mask((__m256i)m, (__m256i)m) != 0; }
 /* v16f_exp_neg, 8 lanes */
-MGS_VINLINE v8f v8f_exp_neg(v8f x) {
-  x = v8f_max(x, v8f_set1(-12.0f));
-  const v8f magic = v8f_set1(12582912.0f);
-  v8f n = v8f_fma(x, v8f_set1(1.44269504088896341f), magic) - magic;
-  v8f r = v8f_fma(n, v8f_set1(-0.693359375f), x);
-  r = v8f_fma(n, v8f_set1(2.12194440e-4f), r);
-  v8f z = r * r;
-  v8f y = v8f_set1(1.9875691500E-4f);
-  y = v8f_fma(y, r, v8f_set1(1.3981999507E-3f));
-  y = v8f_fma(y, r, v8f_set1(8.3334519073E-3f));
-  y = v8f_fma(y, r, v8f_set1(4.1665795894E-2f));
-  y = v8f_fma(y, r, v8f_set1(1.6666665459E-1f));
-  y = v8f_fma(y, r, v8f_set1(5.0000001201E-1f));
-  y = v8f_fma(y, z, r + v8f_set1(1.0f));
-  v8i e = __builtin_convertvector(n, v8i);
-  v8i bits = (e + 127) << 23;
-  return y * (v8f)bits;
-}
+MGS_VINLINE v8f v8f_exp_neg(v8f x) { MGS_EXP_NEG_BODY(v8f, v8i, v8f_set1, v8f_max, v8f_fma) }
 #endif
 
 /* exp(x) over the float range (Cephes, about 1 ulp); x clamped to [-87, 88] so the result

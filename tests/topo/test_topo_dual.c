@@ -36,24 +36,7 @@ static float *cheese(int N, uint32_t seed) {
 
 static mgs_diagram *run(const float *f, int N, double w, int cons, int sup, int full_red, int d2_red, int sparse,
                         mgs_topo_stats *st) {
-  mgs_topo_opts o;
-  mgs_topo_opts_default(&o);
-  o.construction = cons ? MGS_TOPO_T : MGS_TOPO_V;
-  o.filtration = sup ? MGS_TOPO_SUPERLEVEL : MGS_TOPO_SUBLEVEL;
-  o.half_width = w;
-  o.full_reduction = full_red;
-  o.d2_reduction = d2_red;
-  mgs_diagram *d = NULL;
-  mgs_error err = {0};
-  if (!sparse) {
-    CHECK_OK(mgs_topo_persistence_dense_stats(f, N, N, N, &o, &d, st, &err), &err);
-  } else {
-    mgs_topo_sparse *s = NULL;
-    CHECK_OK(mgs_topo_sparse_from_dense(f, N, N, N, (float)w, &s, &err), &err);
-    if (s) CHECK_OK(mgs_topo_persistence_sparse(s, &o, &d, st, &err), &err);
-    mgs_topo_sparse_destroy(s);
-  }
-  return d;
+  return tt_run(f, N, w, cons, sup, full_red, d2_red, sparse, st);
 }
 
 static int same_end(const mgs_pair_end *a, const mgs_pair_end *b) {

@@ -11,23 +11,7 @@ static void equal_cases(void);
 static int cons_t = 0; /* construction of the next compare_case / run calls */
 
 static mgs_diagram *run(const float *f, int N, double w, int sup, int full_red, int sparse, mgs_topo_stats *st) {
-  mgs_topo_opts o;
-  mgs_topo_opts_default(&o);
-  o.construction = cons_t ? MGS_TOPO_T : MGS_TOPO_V;
-  o.half_width = w;
-  o.filtration = sup ? MGS_TOPO_SUPERLEVEL : MGS_TOPO_SUBLEVEL;
-  o.full_reduction = full_red;
-  mgs_diagram *d = NULL;
-  mgs_error err = {0};
-  if (!sparse) {
-    CHECK_OK(mgs_topo_persistence_dense_stats(f, N, N, N, &o, &d, st, &err), &err);
-  } else {
-    mgs_topo_sparse *s = NULL;
-    CHECK_OK(mgs_topo_sparse_from_dense(f, N, N, N, (float)w, &s, &err), &err);
-    if (s) CHECK_OK(mgs_topo_persistence_sparse(s, &o, &d, st, &err), &err);
-    mgs_topo_sparse_destroy(s);
-  }
-  return d;
+  return tt_run(f, N, w, cons_t, sup, full_red, 0, sparse, st);
 }
 
 static void compare_case(int kind, int N, double w, int sup, int sparse, uint32_t seed) {

@@ -82,6 +82,30 @@ static inline float *tt_field(int kind, int N, uint32_t seed) {
   return f;
 }
 
+/* Persistence of a dense test field through the dense or the sparse (band) path, with the
+ * engine's reference switches (full reduction, dimension 2 by reduction). */
+static inline mgs_diagram *tt_run(const float *f, int N, double w, int cons_t, int sup, int full_red, int d2_red,
+                                  int sparse, mgs_topo_stats *st) {
+  mgs_topo_opts o;
+  mgs_topo_opts_default(&o);
+  o.construction = cons_t ? MGS_TOPO_T : MGS_TOPO_V;
+  o.filtration = sup ? MGS_TOPO_SUPERLEVEL : MGS_TOPO_SUBLEVEL;
+  o.half_width = w;
+  o.full_reduction = full_red;
+  o.d2_reduction = d2_red;
+  mgs_diagram *d = NULL;
+  mgs_error err = {0};
+  if (!sparse) {
+    CHECK_OK(mgs_topo_persistence_dense_stats(f, N, N, N, &o, &d, st, &err), &err);
+  } else {
+    mgs_topo_sparse *s = NULL;
+    CHECK_OK(mgs_topo_sparse_from_dense(f, N, N, N, (float)w, &s, &err), &err);
+    if (s) CHECK_OK(mgs_topo_persistence_sparse(s, &o, &d, st, &err), &err);
+    mgs_topo_sparse_destroy(s);
+  }
+  return d;
+}
+
 static inline const char *tt_python(void) {
   const char *p = getenv("MGS_PYTHON");
   if (p && *p) return p;

@@ -36,28 +36,6 @@ static mgs_vdb_grid *build_sdf(const mgs_vdb_grid *a, mgs_vdb_sdf_method m, doub
   return s;
 }
 
-/* Max |sdf - analytic| over the active band voxels of a sphere (centre c, radius R). */
-static double sphere_band_error(const mgs_vdb_grid *s, const double c[3], double R, size_t *count) {
-  size_t nl = mgs_vdb_leaf_count(s);
-  mgs_vdb_leaf_view *lv = malloc(nl * sizeof *lv);
-  mgs_vdb_leaf_views(s, lv, nl);
-  double h = mgs_vdb_grid_voxel_size(s), worst = 0;
-  *count = 0;
-  for (size_t l = 0; l < nl; l++)
-    for (int off = 0; off < 512; off++) {
-      if (!mgs_vdb_leaf_is_active(&lv[l], off)) continue;
-      double ijk[3] = {lv[l].origin[0] + (off >> 6), lv[l].origin[1] + ((off >> 3) & 7), lv[l].origin[2] + (off & 7)};
-      double x[3];
-      mgs_vdb_index_to_world(s, ijk, x);
-      double r = sqrt((x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) + (x[2] - c[2]) * (x[2] - c[2]));
-      double e = fabs(lv[l].values[off] - (r - R)) / h;
-      if (e > worst) worst = e;
-      (*count)++;
-    }
-  free(lv);
-  return worst;
-}
-
 /* Max |sdf - exact| / h over the active band voxels, exact(x) = signed distance at world x. */
 typedef double (*exact_fn)(const void *ctx, const double x[3]);
 static double band_error(const mgs_vdb_grid *s, exact_fn exact, const void *ctx, size_t *count) {
@@ -78,6 +56,17 @@ static double band_error(const mgs_vdb_grid *s, exact_fn exact, const void *ctx,
     }
   free(lv);
   return worst;
+}
+
+/* Max |sdf - analytic| / h over the active band voxels of a sphere (centre c, radius R). */
+typedef struct { double c[3], R; } sphere_ctx;
+static double sphere_exact(const void *ctx, const double x[3]) {
+  const sphere_ctx *q = ctx;
+  return sqrt((x[0] - q->c[0]) * (x[0] - q->c[0]) + (x[1] - q->c[1]) * (x[1] - q->c[1]) + (x[2] - q->c[2]) * (x[2] - q->c[2])) - q->R;
+}
+static double sphere_band_error(const mgs_vdb_grid *s, const double c[3], double R, size_t *count) {
+  sphere_ctx q = {{c[0], c[1], c[2]}, R};
+  return band_error(s, sphere_exact, &q, count);
 }
 
 /* Ellipsoid {(y-c)ᵀ M (y-c) = ρ²} in M's eigenbasis (V columns, eigenvalues lam): semi-axes

@@ -233,11 +233,11 @@ bool closest_point(QuadField &q, const Vec3d &x, Vec3d &p, int iters) {
   }
 }
 
-// Per-leaf parallel loop over the active voxels of a mask tree.
-template <class F> void for_each_on(const MaskTree &m, const F &f) {
-  std::vector<const MaskTree::LeafNodeType *> leaves;
+// Per-leaf parallel loop over the leaves of a tree (const tree: read them; else edit them).
+template <class Tree, class F> void for_each_on(Tree &m, const F &f) {
+  std::vector<decltype(&*m.beginLeaf())> leaves;
   leaves.reserve(m.leafCount());
-  for (auto it = m.cbeginLeaf(); it; ++it) leaves.push_back(&*it);
+  for (auto it = m.beginLeaf(); it; ++it) leaves.push_back(&*it);
   mgs_vdb_detail::parallel_for(0, leaves.size(), 16, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; i++) f(*leaves[i]);
   });
@@ -251,40 +251,28 @@ FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
   // Inside = active α voxels with A > τ (inactive α is 0, outside).
   MaskTree inside(at, false, TopologyCopy());
   inside.voxelizeActiveTiles();
-  {
-    std::vector<MaskTree::LeafNodeType *> leaves;
-    leaves.reserve(inside.leafCount());
-    for (auto it = inside.beginLeaf(); it; ++it) leaves.push_back(&*it);
-    mgs_vdb_detail::parallel_for(0, leaves.size(), 16, [&](size_t b, size_t e) {
-      tree::ValueAccessor<const FloatTree> acc(at);
-      for (size_t i = b; i < e; i++)
-        for (auto v = leaves[i]->getValueMask().beginOn(); v; ++v)
-          if (!(acc.getValue(leaves[i]->offsetToGlobalCoord(v.pos())) > tau)) leaves[i]->setValueOff(v.pos());
-    });
-    tools::pruneInactive(inside);
-  }
+  for_each_on(inside, [&](MaskTree::LeafNodeType &l) {
+    tree::ValueAccessor<const FloatTree> acc(at);
+    for (auto v = l.getValueMask().beginOn(); v; ++v)
+      if (!(acc.getValue(l.offsetToGlobalCoord(v.pos())) > tau)) l.setValueOff(v.pos());
+  });
+  tools::pruneInactive(inside);
   // Seeds: voxels with a 6-neighbour on the other side of the discrete interface.
   MaskTree seeds(inside);
   tools::dilateActiveValues(seeds, 1, tools::NN_FACE, tools::EXPAND_TILES);
   seeds.voxelizeActiveTiles();
-  {
-    std::vector<MaskTree::LeafNodeType *> leaves;
-    leaves.reserve(seeds.leafCount());
-    for (auto it = seeds.beginLeaf(); it; ++it) leaves.push_back(&*it);
-    mgs_vdb_detail::parallel_for(0, leaves.size(), 16, [&](size_t b, size_t e) {
-      tree::ValueAccessor<const MaskTree> in(inside);
-      for (size_t i = b; i < e; i++)
-        for (auto v = leaves[i]->getValueMask().beginOn(); v; ++v) {
-          const Coord c = leaves[i]->offsetToGlobalCoord(v.pos());
-          const bool s = in.isValueOn(c);
-          if (in.isValueOn(c.offsetBy(-1, 0, 0)) == s && in.isValueOn(c.offsetBy(1, 0, 0)) == s &&
-              in.isValueOn(c.offsetBy(0, -1, 0)) == s && in.isValueOn(c.offsetBy(0, 1, 0)) == s &&
-              in.isValueOn(c.offsetBy(0, 0, -1)) == s && in.isValueOn(c.offsetBy(0, 0, 1)) == s)
-            leaves[i]->setValueOff(v.pos());
-        }
-    });
-    tools::pruneInactive(seeds);
-  }
+  for_each_on(seeds, [&](MaskTree::LeafNodeType &l) {
+    tree::ValueAccessor<const MaskTree> in(inside);
+    for (auto v = l.getValueMask().beginOn(); v; ++v) {
+      const Coord c = l.offsetToGlobalCoord(v.pos());
+      const bool s = in.isValueOn(c);
+      if (in.isValueOn(c.offsetBy(-1, 0, 0)) == s && in.isValueOn(c.offsetBy(1, 0, 0)) == s &&
+          in.isValueOn(c.offsetBy(0, -1, 0)) == s && in.isValueOn(c.offsetBy(0, 1, 0)) == s &&
+          in.isValueOn(c.offsetBy(0, 0, -1)) == s && in.isValueOn(c.offsetBy(0, 0, 1)) == s)
+        l.setValueOff(v.pos());
+    }
+  });
+  tools::pruneInactive(seeds);
   // The whole band: voxels within Chebyshev distance w of a seed hold every voxel closer
   // than w to a resolved surface (its closest point lies in a cell with a seed corner).
   MaskTree band(seeds);
@@ -419,20 +407,14 @@ FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
   const double t3 = mgs_now();
   cp.clear();
   // Voxels to world units; beyond the band: inactive ±bg; interior tiles by flood fill.
-  {
-    std::vector<FloatTree::LeafNodeType *> leaves;
-    leaves.reserve(dist.leafCount());
-    for (auto it = dist.beginLeaf(); it; ++it) leaves.push_back(&*it);
-    mgs_vdb_detail::parallel_for(0, leaves.size(), 16, [&](size_t b, size_t e) {
-      for (size_t i = b; i < e; i++)
-        for (auto v = leaves[i]->beginValueOn(); v; ++v) {
-          const float d = *v * h;
-          if (d >= bg) v.setValue(bg), v.setValueOff();
-          else if (d <= -bg) v.setValue(-bg), v.setValueOff();
-          else v.setValue(d);
-        }
-    });
-  }
+  for_each_on(dist, [&](FloatTree::LeafNodeType &l) {
+    for (auto v = l.beginValueOn(); v; ++v) {
+      const float d = *v * h;
+      if (d >= bg) v.setValue(bg), v.setValueOff();
+      else if (d <= -bg) v.setValue(-bg), v.setValueOff();
+      else v.setValue(d);
+    }
+  });
   auto g = FloatGrid::create(dist_ptr);
   g->setTransform(alpha.transform().copy());
   tools::signedFloodFill(g->tree());

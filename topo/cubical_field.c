@@ -4,21 +4,10 @@
 #include <string.h>
 #include "topo/cubical_internal.h"
 
-/* Voxel coordinates spanned by doubled coordinate a along one axis (1 or 2 of them). */
-static inline int axis_voxels(int construction, int32_t a, int32_t v[2]) {
-  if (construction == MGS_TOPO_V) {
-    if (!(a & 1)) { v[0] = a >> 1; return 1; }
-    v[0] = (a - 1) >> 1; v[1] = (a + 1) >> 1; return 2;
-  }
-  /* T: odd a is a voxel's extent; even a is the wall between voxels a/2-1 and a/2 */
-  if (a & 1) { v[0] = (a - 1) >> 1; return 1; }
-  v[0] = (a >> 1) - 1; v[1] = a >> 1; return 2;
-}
-
 float cub_cell_value(const cub_field *f, int32_t a, int32_t b, int32_t c) {
   int32_t xs[2], ys[2], zs[2];
-  int nx = axis_voxels(f->construction, a, xs), ny = axis_voxels(f->construction, b, ys),
-      nz = axis_voxels(f->construction, c, zs);
+  int nx = cub_axis_voxels(f->construction, a, xs), ny = cub_axis_voxels(f->construction, b, ys),
+      nz = cub_axis_voxels(f->construction, c, zs);
   if (f->construction == MGS_TOPO_V) {
     float m = -INFINITY;
     for (int i = 0; i < nx; i++)
@@ -41,8 +30,8 @@ float cub_cell_value(const cub_field *f, int32_t a, int32_t b, int32_t c) {
 
 void cub_cell_voxel(const cub_field *f, int32_t a, int32_t b, int32_t c, int32_t vox[3]) {
   int32_t xs[2], ys[2], zs[2];
-  int nx = axis_voxels(f->construction, a, xs), ny = axis_voxels(f->construction, b, ys),
-      nz = axis_voxels(f->construction, c, zs);
+  int nx = cub_axis_voxels(f->construction, a, xs), ny = cub_axis_voxels(f->construction, b, ys),
+      nz = cub_axis_voxels(f->construction, c, zs);
   int first = 1;
   float best = 0;
   for (int i = 0; i < nx; i++)

@@ -174,4 +174,16 @@ mgs_status mgs_topo_check_opts(const mgs_topo_opts *o, mgs_error *err);
 mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs_topo_opts *opts,
                                              double w_limit, mgs_diagram **out,
                                              mgs_topo_stats *stats, mgs_error *err);
+
+/* Voxel coordinates spanned by doubled coordinate a along one axis (1 or 2 of them). V: even
+ * a is a voxel, odd a the edge between two; T: odd a is a voxel's extent, even a the wall
+ * between voxels a/2-1 and a/2. */
+static inline int cub_axis_voxels(int construction, int32_t a, int32_t v[2]) {
+  if (construction == MGS_TOPO_V) {
+    if (!(a & 1)) { v[0] = a >> 1; return 1; }
+    v[0] = (a - 1) >> 1; v[1] = (a + 1) >> 1; return 2;
+  }
+  if (a & 1) { v[0] = (a - 1) >> 1; return 1; }
+  v[0] = (a >> 1) - 1; v[1] = a >> 1; return 2;
+}
 #endif

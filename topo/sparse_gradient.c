@@ -97,7 +97,7 @@ static int32_t sparse_lo_skip(const void *ctx, int32_t a, int32_t b, int32_t c) 
    * makes a T cell -w, so the block of x = a/2 suffices */
   int cons = p->construction;
   int32_t x = a >> 1, ys[2], zs[2];
-  int ny = axis_set(cons, b, ys), nz = axis_set(cons, c, zs);
+  int ny = cub_axis_voxels(cons, b, ys), nz = cub_axis_voxels(cons, c, zs);
   for (int j = 0; j < ny; j++)
     for (int k = 0; k < nz; k++) {
       uint32_t bl = cub_map_get(&p->s->map, block_key(x >> 3, ys[j] >> 3, zs[k] >> 3));

@@ -53,19 +53,10 @@ float cub_sparse_voxel(const void *ctx, int32_t x, int32_t y, int32_t z);
 #define WZ 11
 static inline float win(const float *w, int x, int y, int z) { return w[((x + 2) * WY + (y + 1)) * WZ + (z + 1)]; }
 
-static inline int axis_set(int cons, int32_t a, int32_t v[2]) {
-  if (cons == MGS_TOPO_V) {
-    if (!(a & 1)) { v[0] = a >> 1; return 1; }
-    v[0] = (a - 1) >> 1; v[1] = (a + 1) >> 1; return 2;
-  }
-  if (a & 1) { v[0] = (a - 1) >> 1; return 1; }
-  v[0] = (a >> 1) - 1; v[1] = a >> 1; return 2;
-}
-
 /* value of the cell with doubled coordinates (a,b,c) relative to the leaf origin */
 static inline float wcell(int cons, const float *w, int32_t a, int32_t b, int32_t c) {
   int32_t xs[2], ys[2], zs[2];
-  int nx = axis_set(cons, a, xs), ny = axis_set(cons, b, ys), nz = axis_set(cons, c, zs);
+  int nx = cub_axis_voxels(cons, a, xs), ny = cub_axis_voxels(cons, b, ys), nz = cub_axis_voxels(cons, c, zs);
   float m = win(w, xs[0], ys[0], zs[0]);
   for (int i = 0; i < nx; i++)
     for (int j = 0; j < ny; j++)

@@ -117,6 +117,8 @@ typedef struct mgs_train_options {
   int sh_every;              /* raise the active degree every N iterations, 1000 */
   float lambda_dssim;        /* 0.2 */
   double lr_mean_init, lr_mean_final; /* 1.6e-4, 1.6e-6, times the scene extent */
+  int lr_mean_max_steps;     /* 30000: the decay's length, whatever `iterations` is (the
+                                reference's position_lr_max_steps); 0 = `iterations` */
   float lr_log_scale, lr_rot, lr_opacity, lr_sh_dc, lr_sh_rest;
   uint64_t seed;
   int checkpoint_every;      /* 0 = never (besides Ctrl-C) */
@@ -130,28 +132,49 @@ void mgs_train_options_default(mgs_train_options *o);
 
 typedef struct mgs_trainer mgs_trainer;
 struct mgs_strategy;
+struct mgs_term;
 
 /* Takes ownership of `init` (the initial model) and `strategy` (may be NULL: no density
- * control). The dataset is borrowed and must have its train images loaded. */
+ * control). The dataset is borrowed and must have its train images loaded.
+ *
+ * Save points. The reference saves, evaluates and reports "iteration N" after iteration
+ * N's backward and before its densification, opacity reset and optimizer step: the model
+ * it writes is the one iteration N-1 left. This trainer decides that once, here:
+ * mgs_trainer_run_to(t, N) stops at that point (iterations 1..N-1 complete), and
+ * mgs_trainer_model_iteration() names the current model as the reference would. The last
+ * iteration has neither optimizer step nor density control (as the reference, whose final
+ * densification would only change a model it never saves), so after a whole run the model
+ * is the reference's final one. Periodic checkpoints are taken after a whole iteration,
+ * which is where --resume continues exactly. */
 mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,
                               struct mgs_strategy *strategy, mgs_trainer **out, mgs_error *err);
 void mgs_trainer_destroy(mgs_trainer *t);
+/* Adds a loss term (train/mgs_term.h); the trainer owns it (destroyed on failure too).
+ * Terms run in the order added; their state is part of checkpoints. */
+mgs_status mgs_trainer_add_term(mgs_trainer *t, struct mgs_term *term, mgs_error *err);
+/* The last iteration's weighted value of each term (in the order added); n_out <= count. */
+size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out);
 /* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */
 mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err);
 /* Steps until `iterations`, drawing progress, writing periodic checkpoints, checking the
  * stop flag (then writes a checkpoint and returns MGS_ERR_INTERRUPTED). */
 mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err);
-/* The same, stopping after iteration `until` (for saves and evaluations on the way). */
+/* The same, stopping after iteration `until` is complete. */
 mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err);
+/* Runs to the save point of iteration n (see above; n = iterations runs the whole run). */
+mgs_status mgs_trainer_run_to(mgs_trainer *t, int n, mgs_error *err);
 int mgs_trainer_iteration(const mgs_trainer *t);  /* iterations completed */
+/* The iteration the reference would name the current model by: iterations completed + 1,
+ * or the total once the last iteration ran. */
+int mgs_trainer_model_iteration(const mgs_trainer *t);
 int mgs_trainer_active_sh(const mgs_trainer *t);
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
 /* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam (in 2
- * on iterations where the two run fused). */
-#define MGS_TRAIN_PHASES 5
+ * on iterations where the two run fused), 5 loss terms (train/mgs_term.h). */
+#define MGS_TRAIN_PHASES 6
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
 /* Mean PSNR and SSIM over a split's views (images loaded on demand). */
 mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views,

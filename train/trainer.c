@@ -17,6 +17,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->lambda_dssim = 0.2f;
   o->lr_mean_init = 1.6e-4;
   o->lr_mean_final = 1.6e-6;
+  o->lr_mean_max_steps = 30000;
   o->lr_log_scale = 5e-3f;
   o->lr_rot = 1e-3f;
   o->lr_opacity = 0.05f;
@@ -100,13 +101,36 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   mgs_gaussians_destroy(t->grad);
   mgs_adam_destroy(t->adam);
   mgs_strategy_destroy(t->strategy);
+  for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
+  free(t->terms); free(t->term_values);
   mgs_raster_destroy(t->raster);
   mgs_progress_destroy(t->progress);
   free(t->perm); free(t->dl); free(t->gm2d);
   free(t);
 }
 
+mgs_status mgs_trainer_add_term(mgs_trainer *t, mgs_term *term, mgs_error *err) {
+  if (!term) return mgs_error_set(err, MGS_ERR_ARG, "trainer: no loss term given");
+  mgs_term **tt = realloc(t->terms, (t->n_terms + 1) * sizeof *tt);
+  double *tv = tt ? realloc(t->term_values, (t->n_terms + 1) * sizeof *tv) : NULL;
+  if (tt) t->terms = tt;
+  if (tv) t->term_values = tv;
+  if (!tt || !tv) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
+  t->terms[t->n_terms] = term;
+  t->term_values[t->n_terms++] = 0;
+  return MGS_OK;
+}
+
+size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out) {
+  size_t n = t->n_terms < n_out ? t->n_terms : n_out;
+  if (n) memcpy(out, t->term_values, n * sizeof *out);
+  return t->n_terms;
+}
+
 int mgs_trainer_iteration(const mgs_trainer *t) { return t->iteration; }
+int mgs_trainer_model_iteration(const mgs_trainer *t) {
+  return t->iteration >= t->o.iterations ? t->o.iterations : t->iteration + 1;
+}
 int mgs_trainer_active_sh(const mgs_trainer *t) { return t->active_sh; }
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
@@ -161,7 +185,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   int it = t->iteration + 1;
   double t0 = mgs_now();
   double ext = t->ds->extent > 0 ? t->ds->extent : 1.0;
-  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, o->iterations);
+  int64_t lr_steps = o->lr_mean_max_steps > 0 ? o->lr_mean_max_steps : o->iterations;
+  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, lr_steps);
   if (o->sh_every > 0 && it % o->sh_every == 0 && t->active_sh < o->sh_degree) t->active_sh++;
   t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
 
@@ -193,19 +218,53 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   ss.iteration = it; ss.model = t->g; ss.adam = t->adam;
   ss.grad_mean2d = t->gm2d; ss.radii = ro.radii; ss.width = ro.width; ss.height = ro.height;
   ss.extent = ext; ss.rng = &t->rng;
-  int use_strategy = t->strategy && !o->freeze;
-  const unsigned all = (1u << MGS_PARAM_COUNT) - 1;
   /* the reference does no optimizer step on the last iteration, and none on tensors the
-     strategy replaced in this one; when the strategy's hook needs neither the gradients nor
-     the unstepped model, the backward and the Adam step run fused (identical results) */
+     strategy replaced in this one; its last densification would change a model it never
+     saves, so the last iteration runs neither (see mgs_trainer_run_to) */
   int step_opt = it < o->iterations && !o->freeze;
-  int fused = step_opt && (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
-  if (!fused) {
+  int use_strategy = t->strategy && !o->freeze && it < o->iterations;
+  const unsigned all = (1u << MGS_PARAM_COUNT) - 1;
+  unsigned term_hooks = 0;
+  mgs_term_step ts;
+  memset(&ts, 0, sizeof ts);
+  if (step_opt) {
+    for (size_t k = 0; k < t->n_terms; k++) {
+      t->term_values[k] = 0;
+      if (t->terms[k]->ops->active) term_hooks |= t->terms[k]->ops->active(t->terms[k]->self, it);
+    }
+    ts.iteration = it; ts.iterations = o->iterations; ts.model = t->g; ts.view = v;
+    ts.view_index = t->perm[t->perm_pos - 1]; ts.color = ro.color; ts.gt = gt;
+    ts.width = ro.width; ts.height = ro.height; ts.active_sh = t->active_sh; ts.extent = ext;
+    ts.rng = &t->rng; ts.dl_dcolor = t->dl;
+  }
+  /* when neither the strategy's hook nor a loss term needs the gradients or the unstepped
+     model, the backward and the Adam step run fused (identical results) */
+  int fused = step_opt && !(term_hooks & MGS_TERM_MODEL) &&
+              (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
+  if (!fused && step_opt) {
     if ((st = zero_grad(t, err))) return st;
     ss.grad = t->grad;
   }
   double t2 = mgs_now();
   t->phase_s[1] += t2 - t1;
+  if (term_hooks & MGS_TERM_IMAGE) {
+    for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
+      mgs_term *tm = t->terms[k];
+      if (!tm->ops->image_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_IMAGE)) continue;
+      ts.value = 0;
+      st = tm->ops->image_grad(tm->self, &ts, err);
+      t->term_values[k] += ts.value;
+    }
+    if (st) return st;
+    double t2b = mgs_now();
+    t->phase_s[5] += t2b - t2;
+    t2 = t2b;
+  }
+  if (!step_opt && !use_strategy) { /* nothing reads a gradient in this iteration */
+    t->iteration = it;
+    t->seconds += mgs_now() - t0;
+    return MGS_OK;
+  }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
   if (fused) st = mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, err);
@@ -214,6 +273,20 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if (st) return st;
   double t3 = mgs_now();
   t->phase_s[2] += t3 - t2;
+  if (term_hooks & MGS_TERM_MODEL) {
+    ts.grad = t->grad;
+    for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
+      mgs_term *tm = t->terms[k];
+      if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
+      ts.value = 0;
+      st = tm->ops->model_grad(tm->self, &ts, err);
+      t->term_values[k] += ts.value;
+    }
+    if (st) return st;
+    double t3b = mgs_now();
+    t->phase_s[5] += t3b - t3;
+    t3 = t3b;
+  }
   if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
     return st;
   double t4 = mgs_now();
@@ -239,6 +312,10 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
 
 mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err) {
   return mgs_trainer_run_until(t, t->o.iterations, err);
+}
+
+mgs_status mgs_trainer_run_to(mgs_trainer *t, int n, mgs_error *err) {
+  return mgs_trainer_run_until(t, n >= t->o.iterations ? t->o.iterations : n - 1, err);
 }
 
 mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err) {

@@ -3,6 +3,7 @@
 #define MGS_TRAINER_INTERNAL_H
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "train/mgs_term.h"
 #include "render/mgs_raster.h"
 #include "core/mgs_log.h"
 
@@ -12,6 +13,9 @@ struct mgs_trainer {
   mgs_gaussians *g, *grad;
   mgs_adam *adam;
   mgs_strategy *strategy;       /* owned, may be NULL */
+  mgs_term **terms;             /* owned loss terms, in the order added */
+  double *term_values;          /* each term's last weighted value */
+  size_t n_terms;
   mgs_raster *raster;
   mgs_raster_settings rs;
   int iteration;                /* completed */

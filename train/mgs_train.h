@@ -172,6 +172,8 @@ const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
+/* The learning rate the last iteration used for a parameter group. */
+double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group);
 /* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam (in 2
  * on iterations where the two run fused), 5 loss terms (train/mgs_term.h). */
 #define MGS_TRAIN_PHASES 6

@@ -136,6 +136,7 @@ const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
 double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
 double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
+double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group) { return t->adam->lr[group]; }
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]) {
   memcpy(out, t->phase_s, sizeof t->phase_s);
 }

@@ -1,6 +1,8 @@
 /* Mesh reading through assimp's C API: any format it reads (OBJ, PLY, OFF, ...),
  * triangulated, all meshes merged, vertices at identical positions welded (OBJ files
- * split vertices by normal or texture coordinate). */
+ * split vertices by normal or texture coordinate). Counts are checked against the file
+ * size before assimp reads (mesh_check.c) and assimp validates what it read before its
+ * other post-processing steps (aiProcess_ValidateDataStructure runs first). */
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -10,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "core/mesh_check.h"
 #include "core/mgs_mesh.h"
 
 typedef struct { float p[3]; uint32_t i; } keyed_vertex;
@@ -69,10 +72,13 @@ mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
   struct stat st;
   if (stat(path, &st) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: mesh file not found", path);
   if (!S_ISREG(st.st_mode)) return mgs_error_set(err, MGS_ERR_IO, "%s: not a regular file", path);
+  /* Counts against the file size first: assimp trusts them (mesh_check.h). */
+  mgs_status pre = mgs_mesh_precheck(path, err);
+  if (pre != MGS_OK) return pre;
   log_error[0] = 0;
   struct aiLogStream stream = {log_cb, NULL};
   aiAttachLogStream(&stream);
-  const struct aiScene *sc = aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  const struct aiScene *sc = aiImportFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
   aiDetachLogStream(&stream);
   if (sc && log_error[0]) {
     aiReleaseImport(sc);

@@ -297,10 +297,12 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_dataset *ds = NULL;
   int rc = 1;
   mgs_trainer *t = NULL;
+  mgs_run_lock *lock = NULL;
   mgs_status st = mgs_dataset_load(data, &dopt, &ds, &err);
   if (st) goto done;
+  /* the lock before --force clears anything: a second trainer on RUN is refused */
+  if ((st = mgs_run_lock_acquire(run, &lock, &err))) goto done;
   if (!resume && force && (st = clear_run(run, &err))) goto done;
-  if ((st = mgs_mkdir_p(run, &err))) goto done;
 
   mgs_gaussians *g0 = NULL;
   const char *init_used = init;
@@ -383,6 +385,8 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if (st) goto done;
     if ((st = mgs_run_write_cameras(run, ds, &err))) goto done;
   }
+  /* a checkpoint from the start: a run killed at any moment from here on can --resume */
+  if (!resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   struct sigaction sa, old;
   memset(&sa, 0, sizeof sa);
@@ -418,6 +422,7 @@ done:
   if (rc == 1) mgs_cli_fail("train", &err);
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
+  mgs_run_lock_release(lock);
   free(ckpt);
   return rc;
 }

@@ -335,6 +335,9 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
   }
+  /* a checkpoint before anything else of the run is written: from here on a run killed
+     at any moment can --resume */
+  if (!resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   /* settings record and cameras before training (a crash still leaves them) */
   {
@@ -385,8 +388,6 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if (st) goto done;
     if ((st = mgs_run_write_cameras(run, ds, &err))) goto done;
   }
-  /* a checkpoint from the start: a run killed at any moment from here on can --resume */
-  if (!resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   struct sigaction sa, old;
   memset(&sa, 0, sizeof sa);

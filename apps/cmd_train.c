@@ -309,13 +309,15 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_dataset *ds = NULL;
   int rc = 1;
   mgs_trainer *t = NULL;
+  mgs_run_lock *lock = NULL;
   mgs_status st = mgs_dataset_load(data, &dopt, &ds, &err);
   if (st) goto done;
   white = ds->white_background;
   /* the reference's extra opacity reset at densify_from comes with its white background */
   o.adc.white_background = white;
+  /* the lock before --force clears anything: a second trainer on RUN is refused */
+  if ((st = mgs_run_lock_acquire(run, &lock, &err))) goto done;
   if (!resume && force && (st = clear_run(run, &err))) goto done;
-  if ((st = mgs_mkdir_p(run, &err))) goto done;
 
   mgs_gaussians *g0 = NULL;
   const char *init_used = init;
@@ -348,6 +350,9 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
   }
+  /* a checkpoint before anything else of the run is written: from here on a run killed
+     at any moment can --resume */
+  if (!resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   /* settings record and cameras before training (a crash still leaves them) */
   {
@@ -435,6 +440,7 @@ done:
   if (rc == 1) mgs_cli_fail("train", &err);
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
+  mgs_run_lock_release(lock);
   free(ckpt);
   return rc;
 }

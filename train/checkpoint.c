@@ -7,6 +7,7 @@
  * loss terms (version 2: u32 count, then per term its name (32 bytes) and blob), and a
  * final u64 FNV-1a checksum of everything before it. Version 1 files (no terms) are read
  * by runs without loss terms. */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include "train/trainer_internal.h"
@@ -31,11 +32,12 @@ static uint64_t fnv(uint64_t h, const void *p, size_t n) {
   return h;
 }
 
-typedef struct { FILE *f; uint64_t h; int ok; } hwriter;
+typedef struct { FILE *f; uint64_t h; int ok, errnum; } hwriter;
 static void hw(hwriter *w, const void *p, size_t n) {
   if (!w->ok || n == 0) return;
   w->h = fnv(w->h, p, n);
   w->ok = fwrite(p, 1, n, w->f) == n;
+  if (!w->ok) w->errnum = errno; /* disk full, file size limit: said in the message */
 }
 
 /* The loss terms' states, serialized into one buffer: u32 count, then per term its name
@@ -90,7 +92,7 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   FILE *f = NULL;
   mgs_status st = mgs_atomic_open(path, &af, &f, err);
   if (st) { free(blob); free(tblob); return st; }
-  hwriter w = {f, 1469598103934665603ull, 1};
+  hwriter w = {f, 1469598103934665603ull, 1, 0};
   uint32_t ver = CKPT_VERSION, bom = 0x01020304u;
   ckpt_header h;
   memset(&h, 0, sizeof h);
@@ -119,10 +121,11 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   hw(&w, tblob, tblob_len);
   free(tblob);
   uint64_t sum = w.h;
-  if (w.ok) w.ok = fwrite(&sum, sizeof sum, 1, f) == 1;
+  if (w.ok && !(w.ok = fwrite(&sum, sizeof sum, 1, f) == 1)) w.errnum = errno;
   if (!w.ok) {
-    mgs_atomic_abort(af);
-    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write the checkpoint", path);
+    mgs_atomic_abort(af); /* the previous checkpoint stays in place */
+    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write the checkpoint (%s); the previous checkpoint is unchanged", path,
+                         w.errnum ? strerror(w.errnum) : "write error");
   }
   return mgs_atomic_commit(af, err);
 }

@@ -5,7 +5,8 @@
  *   initial Gaussians (points or random) .......... mgs_init_* (train/init.c)
  *   the trainer loop, checkpoints, Ctrl-C ......... mgs_trainer_* (train/trainer.c,
  *                                                   train/checkpoint.c)
- *   the run folder (cameras.json, cfg_args) ....... mgs_run_* (train/run_io.c)
+ *   the run folder (cameras.json, cfg_args) ....... mgs_run_* (train/run_io.c,
+ *                                                   one trainer per folder: run_lock.c)
  * Density-control strategies plug in through train/mgs_strategy.h.
  *
  * Steps are counted as the reference 3DGS does: iteration 1 is the first, learning rates
@@ -197,6 +198,13 @@ mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs
 mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
 /* Largest N with RUN/point_cloud/iteration_N/point_cloud.ply, or -1. */
 int mgs_run_latest_iteration(const char *run_dir);
+/* One trainer per run folder (train/run_lock.c): creates RUN if needed and takes an
+ * exclusive lock on RUN/.morsegs-train.lock; fails with a message naming RUN (and the
+ * holder's pid) when another trainer holds it. The kernel releases it if the process dies;
+ * release removes the file. While held, temp files left by killed trainers are removed. */
+typedef struct mgs_run_lock mgs_run_lock;
+mgs_status mgs_run_lock_acquire(const char *run_dir, mgs_run_lock **out, mgs_error *err);
+void mgs_run_lock_release(mgs_run_lock *l); /* NULL is fine */
 
 /* Opens a run for render/eval: reads cfg_args (source_path, downscale, background,
  * test_every), loads the dataset (images only if load_images) and the .ply of

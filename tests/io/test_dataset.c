@@ -331,7 +331,7 @@ static void test_nerfstudio_bad(void) {
 
 /* ---------------- COLMAP ---------------- */
 
-enum { CM_GOOD = 0, CM_SIMPLE_RADIAL, CM_TRUNCATE_IMAGES, CM_UNKNOWN_CAMERA, CM_HUGE_COUNT, CM_OPENCV };
+enum { CM_GOOD = 0, CM_SIMPLE_RADIAL, CM_TRUNCATE_IMAGES, CM_UNKNOWN_CAMERA, CM_HUGE_COUNT, CM_OPENCV, CM_HUGE_POINTS };
 
 #define SQRT_HALF 0.70710678118654752440
 
@@ -386,7 +386,7 @@ static const char *make_colmap(const char *name, int binary, int variant) {
     }
     io_write_bytes(join(d, "sparse/0/images.bin"), b.p, variant == CM_TRUNCATE_IMAGES ? b.n - 10 : b.n);
     b.n = 0;
-    io_u64(&b, 3);
+    io_u64(&b, variant == CM_HUGE_POINTS ? (1ull << 31) : 3); /* issue 13: 2^31 points in ~200 bytes */
     for (int i = 0; i < 3; i++) {
       io_u64(&b, (uint64_t)(i + 1));
       io_f64(&b, i);
@@ -488,6 +488,7 @@ static void test_colmap_bad(void) {
   expect_load_fail(make_colmap("io_cm_b4", 1, CM_UNKNOWN_CAMERA), 0, MGS_ERR_FORMAT, "images.bin", "camera 7");
   expect_load_fail(make_colmap("io_cm_b5", 0, CM_UNKNOWN_CAMERA), 0, MGS_ERR_FORMAT, "images.txt", "camera 7");
   expect_load_fail(make_colmap("io_cm_b6", 1, CM_HUGE_COUNT), 0, MGS_ERR_FORMAT, "images.bin", "does not fit");
+  expect_load_fail(make_colmap("io_cm_b6p", 1, CM_HUGE_POINTS), 0, MGS_ERR_FORMAT, "points3D.bin", "2147483648");
   const char *dir = make_colmap("io_cm_b7", 1, CM_GOOD);
   unlink(join(dir, "images/img_04.png"));
   expect_load_fail(dir, 0, MGS_ERR_IO, "img_04.png", "not found");

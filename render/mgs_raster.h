@@ -28,6 +28,7 @@
 #ifndef MGS_RASTER_H
 #define MGS_RASTER_H
 #include <stddef.h>
+#include <stdint.h>
 #include "core/mgs_error.h"
 #include "core/mgs_gaussians.h"
 #include "core/mgs_camera.h"
@@ -80,6 +81,14 @@ void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
 /* Output pointers stay valid until the next forward on this context or its destruction. */
 mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
                               const mgs_raster_settings *s, mgs_raster_output *out, mgs_error *err);
+
+/* The same forward projecting only the listed Gaussians (idx: strictly increasing
+ * indices < g->n); all others are treated as culled. The result equals
+ * mgs_raster_forward's when every Gaussian the latter keeps is listed:
+ * render/mgs_visibility.h computes such lists from spatial tiles. */
+mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
+                                   const mgs_raster_settings *s, const uint32_t *idx, size_t n_idx,
+                                   mgs_raster_output *out, mgs_error *err);
 
 /* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
  * Gradients are ADDED into `grad` (a model with the same n; its groups are used as

@@ -25,6 +25,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->seed = 0;
   o->checkpoint_every = 0;
   o->progress = 0;
+  o->vis_rebin_every = 200;
   mgs_adc_options_default(&o->adc);
 }
 
@@ -71,6 +72,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
     mgs_trainer_destroy(t);
     return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
   }
+  if ((st = mgs_trainer_scale_init(t, err))) { mgs_trainer_destroy(t); return st; }
   double ext = ds->extent > 0 ? ds->extent : 1.0;
   t->adam->lr[MGS_PARAM_MEAN] = (float)(o->lr_mean_init * ext);
   t->adam->lr[MGS_PARAM_LOG_SCALE] = o->lr_log_scale;
@@ -101,6 +103,7 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   mgs_adam_destroy(t->adam);
   mgs_strategy_destroy(t->strategy);
   mgs_raster_destroy(t->raster);
+  mgs_trainer_scale_destroy(t);
   mgs_progress_destroy(t->progress);
   free(t->perm); free(t->dl); free(t->gm2d);
   free(t);
@@ -169,7 +172,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][t->perm[t->perm_pos++]];
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
-  mgs_status st = mgs_raster_forward(t->raster, t->g, &v->cam, &t->rs, &ro, err);
+  t->raster_n = t->g->n;
+  mgs_status st = mgs_trainer_scale_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();
   t->phase_s[0] += t1 - t0;
@@ -208,7 +212,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->phase_s[1] += t2 - t1;
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if (fused) st = mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, err);
+  if (fused) st = mgs_trainer_scale_adam_fused(t, ro.radii, all, err);
   else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
@@ -221,7 +225,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   unsigned mask = all & ~ss.replaced_groups;
   if (step_opt && !fused && mask && t->g->n == t->grad->n) {
     int whole = mask == all;
-    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, whole, err);
+    st = mgs_trainer_scale_adam(t, ro.radii, mask, whole, err);
     if (st == MGS_OK && whole) {
       t->grad_clean = 1;
       t->grad_clean_n = t->g->n;
@@ -230,6 +234,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
     if (st) return st;
   }
+  mgs_trainer_scale_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
   t->iteration = it;
   double t5 = mgs_now();
   t->phase_s[4] += t5 - t4;

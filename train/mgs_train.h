@@ -139,6 +139,10 @@ typedef struct mgs_train_options {
   double vis_tile;           /* tile side in world units, 0 = automatic */
   int vis_rebin_every;       /* re-bin the tiles every N iterations (200; 0 = only on count changes) */
   int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the reference) */
+  size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
+                                MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
+                                images loaded as floats up front */
+  int prefetch;              /* views decoded ahead by the cache's thread (8; 0 = no thread) */
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 
@@ -167,6 +171,8 @@ double mgs_trainer_last_loss(const mgs_trainer *t);
  * on iterations where the two run fused). */
 #define MGS_TRAIN_PHASES 5
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
+/* Image-cache figures (zeros without a cache): hits, misses, peak resident bytes. */
+void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *misses, size_t *peak_bytes);
 /* Visibility figures: Gaussians projected per iteration (mean so far), occupied tiles,
  * tile side (0s when visibility is off). */
 void mgs_trainer_visibility_stats(const mgs_trainer *t, double *listed_per_iter, size_t *tiles, double *tile_size);

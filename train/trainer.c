@@ -26,6 +26,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->checkpoint_every = 0;
   o->progress = 0;
   o->vis_rebin_every = 200;
+  o->prefetch = 8;
   mgs_adc_options_default(&o->adc);
 }
 
@@ -84,7 +85,8 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   memcpy(t->rs.background, ds->background, sizeof t->rs.background);
   mgs_rng_init(&t->rng, o->seed, 0x7261696eu);
   shuffle(t);
-  for (size_t i = 0; i < t->perm_len && st == MGS_OK; i++) {
+  /* with an image cache (train/trainer_scale.c) images are decoded on demand instead */
+  for (size_t i = 0; i < t->perm_len && st == MGS_OK && !o->image_cache_mb; i++) {
     mgs_view *v = &ds->views[MGS_SPLIT_TRAIN][i];
     if (!v->image) st = mgs_dataset_load_image(ds, v, err);
     if (st == MGS_OK && (v->image->channels != 3 || v->image->width != v->cam.width || v->image->height != v->cam.height))
@@ -169,7 +171,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
 
   if (t->perm_pos >= t->perm_len) shuffle(t);
-  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][t->perm[t->perm_pos++]];
+  size_t view_index = t->perm[t->perm_pos++];
+  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][view_index];
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
   t->raster_n = t->g->n;
@@ -181,7 +184,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if ((st = grow_floats(&t->dl, &t->dl_cap, np, err))) return st;
   memset(t->dl, 0, np * sizeof(float));
   const float lam = o->lambda_dssim;
-  const float *gt = v->image->data;
+  const float *gt = NULL;
+  if ((st = mgs_trainer_scale_image(t, view_index, &gt, err))) return st;
   double l1 = mgs_loss_l1(ro.color, gt, ro.width, ro.height, 3, 1.0f - lam, t->dl);
   double ssim = mgs_ssim(ro.color, gt, ro.width, ro.height, 3, -lam, t->dl);
   double loss = (1.0 - lam) * l1 + lam * (1.0 - ssim);

@@ -5,10 +5,50 @@
  * strategy added, removed or replaced Gaussians, and every `vis_rebin_every` iterations
  * to tighten bounds grown by moving Gaussians). */
 #include "train/trainer_internal.h"
+#include <stdlib.h>
 #include "render/mgs_visibility.h"
+#include "core/mgs_image_cache.h"
+
+static mgs_status cache_init(mgs_trainer *t, mgs_error *err) {
+  if (!t->o.image_cache_mb) return MGS_OK;
+  if (t->o.image_cache_mb > ((size_t)1 << 40) || t->o.prefetch < 0)
+    return mgs_error_set(err, MGS_ERR_ARG, "trainer: --image-cache-mb %zu / prefetch %d out of range", t->o.image_cache_mb,
+                         t->o.prefetch);
+  return mgs_image_cache_create(t->ds, MGS_SPLIT_TRAIN, t->o.image_cache_mb << 20, t->o.prefetch > 0, &t->cache, err);
+}
+
+mgs_status mgs_trainer_scale_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err) {
+  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][i];
+  if (!t->cache) { *gt = v->image->data; return MGS_OK; }
+  size_t need = (size_t)v->cam.width * (size_t)v->cam.height * 3;
+  if (need > t->gt_cap) {
+    float *b = realloc(t->gt_buf, need * sizeof(float));
+    if (!b) return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory for an image");
+    t->gt_buf = b;
+    t->gt_cap = need;
+  }
+  mgs_status st = mgs_image_cache_get(t->cache, i, t->gt_buf, err);
+  if (st != MGS_OK) return st;
+  /* the views after this one in the epoch's order */
+  if (t->o.prefetch > 0) {
+    size_t k = t->perm_len - t->perm_pos < (size_t)t->o.prefetch ? t->perm_len - t->perm_pos : (size_t)t->o.prefetch;
+    mgs_image_cache_prefetch(t->cache, t->perm + t->perm_pos, k);
+  }
+  *gt = t->gt_buf;
+  return MGS_OK;
+}
+
+void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *misses, size_t *peak_bytes) {
+  mgs_image_cache_stats st = {0};
+  if (t->cache) mgs_image_cache_get_stats(t->cache, &st);
+  if (hits) *hits = st.hits;
+  if (misses) *misses = st.misses;
+  if (peak_bytes) *peak_bytes = st.peak_bytes;
+}
 
 mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err) {
-  if (!t->o.visibility) return MGS_OK;
+  mgs_status st = cache_init(t, err);
+  if (st != MGS_OK || !t->o.visibility) return st;
   if (!(t->o.vis_tile >= 0)) return mgs_error_set(err, MGS_ERR_ARG, "trainer: --vis-tile %g must be >= 0", t->o.vis_tile);
   t->vis = mgs_visibility_create(t->o.vis_tile);
   if (!t->vis) return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
@@ -18,6 +58,10 @@ mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err) {
 void mgs_trainer_scale_destroy(mgs_trainer *t) {
   mgs_visibility_destroy(t->vis);
   t->vis = NULL;
+  mgs_image_cache_destroy(t->cache);
+  t->cache = NULL;
+  free(t->gt_buf);
+  t->gt_buf = NULL;
 }
 
 void mgs_trainer_scale_invalidate(mgs_trainer *t) {

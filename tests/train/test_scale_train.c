@@ -9,6 +9,10 @@
 #include "synth.h"
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "core/mgs_image_cache.h"
+#include "core/mgs_fs.h"
+#include <unistd.h>
+#include <time.h>
 
 static double max_diff(const float *a, const float *b, size_t n) {
   double w = 0;
@@ -236,7 +240,120 @@ static void test_trainer_sparse(void) {
   mgs_gaussians_destroy(gt);
 }
 
+/* A NeRF-synthetic folder of the synthetic scene, loaded without images. */
+static mgs_dataset *written_dataset(const char *dir, size_t n_views, int W, int H) {
+  mgs_gaussians *gt = synth_model(150, 42);
+  mgs_dataset *mem = synth_dataset(gt, n_views, 1, W, H);
+  mgs_error err;
+  mgs_remove_tree(dir, &err);
+  if (!synth_write_nerf(mem, dir)) { fprintf(stderr, "cannot write %s\n", dir); exit(2); }
+  mgs_dataset_destroy(mem);
+  mgs_gaussians_destroy(gt);
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  o.load_images = 0;
+  o.white_background = 0;
+  mgs_dataset *ds = NULL;
+  if (mgs_dataset_load(dir, &o, &ds, &err) != MGS_OK) { fprintf(stderr, "%s\n", err.msg); exit(2); }
+  return ds;
+}
+
+static size_t wait_decodes(mgs_image_cache *c, size_t at_least) {
+  mgs_image_cache_stats st;
+  for (int k = 0; k < 5000; k++) { /* up to 5 s on a loaded machine */
+    mgs_image_cache_get_stats(c, &st);
+    if (st.decodes >= at_least) break;
+    usleep(1000);
+  }
+  return st.decodes;
+}
+
+/* The cache hands out the float images rounded to 8 bits, stays within its budget, hits
+ * what the thread prefetched, and names a missing file. */
+static void test_image_cache(void) {
+  const int W = 40, H = 32;
+  char dir[256];
+  snprintf(dir, sizeof dir, "/tmp/mgs_test_cache_%d", (int)getpid());
+  mgs_dataset *ds = written_dataset(dir, 6, W, H);
+  mgs_dataset *ref = written_dataset(dir, 6, W, H); /* same files, float path */
+  size_t img = (size_t)W * H * 3;
+  mgs_image_cache *c = NULL;
+  mgs_error err;
+  CHECK_OK(mgs_image_cache_create(ds, MGS_SPLIT_TRAIN, 2 * img + img / 2, 1, &c, &err), &err);
+  float *buf = malloc(img * sizeof(float));
+  double worst = 0;
+  size_t decodes = 0;
+  for (int round = 0; round < 2; round++)
+    for (uint32_t i = 0; i < 6; i++) {
+      CHECK_OK(mgs_image_cache_get(c, i, buf, &err), &err);
+      mgs_view *rv = &ref->views[MGS_SPLIT_TRAIN][i];
+      CHECK_OK(mgs_dataset_load_image(ref, rv, &err), &err);
+      for (size_t k = 0; k < img; k++) worst = fmax(worst, fabs(buf[k] - rv->image->data[k]));
+      CHECK(ds->views[MGS_SPLIT_TRAIN][i].image == NULL); /* no float copy kept */
+      uint32_t next = (i + 1) % 6;
+      mgs_image_cache_stats now;
+      mgs_image_cache_get_stats(c, &now);
+      mgs_image_cache_prefetch(c, &next, 1); /* never resident here: 2.5 images, 6 in a cycle */
+      decodes = wait_decodes(c, now.decodes + 1);
+    }
+  CHECK_MSG(worst <= 0.5 / 255.0 + 1e-6, "8-bit rounding error %g", worst);
+  mgs_image_cache_stats st;
+  mgs_image_cache_get_stats(c, &st);
+  CHECK_MSG(st.peak_bytes <= st.budget_bytes && st.resident_bytes <= st.budget_bytes, "peak %zu of %zu", st.peak_bytes,
+            st.budget_bytes);
+  CHECK(decodes >= 12);
+  CHECK_MSG(st.hits == 11 && st.hits + st.misses == 12, "hits %zu misses %zu", st.hits, st.misses);
+  CHECK(st.evictions > 0);
+  mgs_image_cache_destroy(c);
+  /* a budget below one image, no thread: still works, one image at a time */
+  CHECK_OK(mgs_image_cache_create(ds, MGS_SPLIT_TRAIN, 10, 0, &c, &err), &err);
+  for (uint32_t i = 0; i < 6; i++) CHECK_OK(mgs_image_cache_get(c, i, buf, &err), &err);
+  mgs_image_cache_get_stats(c, &st);
+  CHECK(st.misses == 6 && st.peak_bytes == img);
+  /* a missing file: the error names it, and the cache stays usable */
+  char path[512];
+  snprintf(path, sizeof path, "%s/train/r_3.png", dir);
+  CHECK(remove(path) == 0);
+  mgs_error_clear(&err);
+  CHECK(mgs_image_cache_get(c, 3, buf, &err) != MGS_OK && strstr(err.msg, "r_3"));
+  CHECK_OK(mgs_image_cache_get(c, 2, buf, &err), &err);
+  mgs_image_cache_destroy(c);
+  free(buf);
+  mgs_dataset_destroy(ds);
+  mgs_dataset_destroy(ref);
+  mgs_remove_tree(dir, &err);
+}
+
+/* Training through the cache: runs, and ends near the float-image run (the only
+ * difference is the 8-bit rounding of the targets). */
+static void test_trainer_image_cache(void) {
+  char dir[256];
+  snprintf(dir, sizeof dir, "/tmp/mgs_test_cache_tr_%d", (int)getpid());
+  mgs_dataset *ds = written_dataset(dir, 6, 48, 40);
+  mgs_train_options o;
+  train_opts(&o);
+  o.iterations = 40;
+  mgs_trainer *a = make_trainer(ds, &o); /* loads float images into ds */
+  mgs_dataset *ds2 = written_dataset(dir, 6, 48, 40);
+  o.image_cache_mb = 1;
+  o.prefetch = 3;
+  mgs_trainer *b = make_trainer(ds2, &o);
+  mgs_error err;
+  CHECK_OK(mgs_trainer_run(a, &err), &err);
+  CHECK_OK(mgs_trainer_run(b, &err), &err);
+  CHECK_NEAR(mgs_trainer_last_loss(a), mgs_trainer_last_loss(b), 0.02);
+  size_t hits, misses, peak;
+  mgs_trainer_image_cache_stats(b, &hits, &misses, &peak);
+  CHECK(hits + misses == 40 && peak <= (1u << 20) && peak >= 48 * 40 * 3);
+  for (size_t i = 0; i < 6; i++) CHECK(ds2->views[MGS_SPLIT_TRAIN][i].image == NULL);
+  mgs_trainer_destroy(a); mgs_trainer_destroy(b);
+  mgs_dataset_destroy(ds); mgs_dataset_destroy(ds2);
+  mgs_remove_tree(dir, &err);
+}
+
 int main(void) {
+  RUN(test_image_cache);
+  RUN(test_trainer_image_cache);
   RUN(test_sparse_adam);
   RUN(test_trainer_visibility_identical);
   RUN(test_trainer_sparse);

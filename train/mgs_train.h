@@ -135,10 +135,12 @@ typedef struct mgs_train_options {
   int progress;              /* 1: draw the progress bar */
   mgs_adc_options adc;
   /* large scenes (train/trainer_scale.c); all off by default */
-  int visibility;            /* 1: project only the spatial tiles a view can see (same images) */
+  int visibility;            /* 1: project only the spatial tiles a view can see (same images);
+                                -1 auto: on when views see under half the initial model */
   double vis_tile;           /* tile side in world units, 0 = automatic */
   int vis_rebin_every;       /* re-bin the tiles every N iterations (200; 0 = only on count changes) */
-  int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the reference) */
+  int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the
+                                reference); -1 auto: as the visibility's auto decision */
   size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
                                 MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
                                 images loaded as floats up front */

@@ -46,8 +46,37 @@ void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *m
   if (peak_bytes) *peak_bytes = st.peak_bytes;
 }
 
+/* "Auto": a large scene is one where views see a small part of the model. The mean
+ * share of the initial Gaussians in the tiles of up to 16 training views decides. */
+static mgs_status resolve_auto(mgs_trainer *t, mgs_error *err) {
+  if (t->o.visibility >= 0 && t->o.sparse_adam >= 0) return MGS_OK;
+  mgs_visibility *v = mgs_visibility_create(t->o.vis_tile);
+  if (!v) return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  size_t nv = t->ds->n_views[MGS_SPLIT_TRAIN], use = nv < 16 ? nv : 16;
+  double share = 0;
+  mgs_status st = MGS_OK;
+  for (size_t k = 0; k < use && st == MGS_OK; k++) {
+    const uint32_t *idx;
+    size_t n_idx;
+    st = mgs_visibility_query(v, t->g, &t->ds->views[MGS_SPLIT_TRAIN][k * nv / use].cam, &rs, &idx, &n_idx, err);
+    share += (double)n_idx / (double)(t->g->n ? t->g->n : 1);
+  }
+  mgs_visibility_destroy(v);
+  if (st != MGS_OK) return st;
+  share /= (double)(use ? use : 1);
+  int large = share < 0.5;
+  if (t->o.visibility < 0) t->o.visibility = large;
+  if (t->o.sparse_adam < 0) t->o.sparse_adam = large;
+  mgs_info("views see %.0f%% of the initial Gaussians: %s scene; tile visibility %s, %s Adam", 100.0 * share,
+           large ? "a large" : "not a large", t->o.visibility ? "on" : "off", t->o.sparse_adam ? "sparse" : "dense");
+  return MGS_OK;
+}
+
 mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err) {
   mgs_status st = cache_init(t, err);
+  if (st == MGS_OK) st = resolve_auto(t, err);
   if (st != MGS_OK || !t->o.visibility) return st;
   if (!(t->o.vis_tile >= 0)) return mgs_error_set(err, MGS_ERR_ARG, "trainer: --vis-tile %g must be >= 0", t->o.vis_tile);
   t->vis = mgs_visibility_create(t->o.vis_tile);

@@ -113,6 +113,13 @@ mgs_status mgs_raster_backward_sink(mgs_raster *r, mgs_gaussians *model, const f
                                     const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                     mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err);
 
+/* The same, calling the sink only for blocks holding a Gaussian with radius > 0 (culled
+ * Gaussians have zero gradients: a consumer that leaves them alone, as sparse Adam, needs
+ * no call; the cost then follows what the view saw). */
+mgs_status mgs_raster_backward_sink_visible(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                            const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                            mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

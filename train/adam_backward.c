@@ -84,7 +84,9 @@ static mgs_status step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r
   /* the step counts advance only once the backward has accepted its arguments */
   mgs_adam probe = *a;
   c.n_grp = mgs_adam_prepare(&probe, model, NULL, group_mask, c.grp, c.gid);
-  mgs_status st = mgs_raster_backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err);
+  /* sparse: blocks without a visible Gaussian would be skipped row by row anyway */
+  mgs_status st = radii ? mgs_raster_backward_sink_visible(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err)
+                        : mgs_raster_backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err);
   if (st != MGS_OK) return st;
   memcpy(a->t, probe.t, sizeof a->t);
   for (int k = 0; k < c.n_grp; k++) {

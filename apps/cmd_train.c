@@ -45,6 +45,14 @@ static void usage(FILE *f) {
     "      --force             reuse a non-empty RUN (its previous outputs are removed)\n"
     "      --threads N         worker threads (all cores)\n"
     "      --freeze            diagnostic: never update the parameters (test calibration)\n"
+    "  large scenes (docs/notes-scale.md):\n"
+    "      --visibility auto|on|off  project only the spatial tiles a view can see (same images;\n"
+    "                          auto: on when views see under half of the initial Gaussians)\n"
+    "      --vis-tile S        tile side in world units (auto: ~256 Gaussians a tile)\n"
+    "      --sparse-adam | --dense-adam  step only the Gaussians the view saw (differs from the\n"
+    "                          reference, which steps all; default: sparse when visibility is auto-on)\n"
+    "      --image-cache-mb N  stream train images through an 8-bit cache of N MiB with a prefetch\n"
+    "                          thread (0 = all images in memory as floats, the default)\n"
     "      --quiet             no progress bar\n"
     "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
     "  --normal-loss, --init levelset|lpvi.\n");
@@ -53,7 +61,8 @@ static void usage(FILE *f) {
 enum {
   O_ITERS = 1000, O_DOWNSCALE, O_SH, O_WHITE, O_BLACK, O_TEST_EVERY, O_SEED, O_STRATEGY, O_INIT,
   O_RANDOM_POINTS, O_DFROM, O_DUNTIL, O_DEVERY, O_RESET, O_GTHR, O_CKPT, O_SAVE_AT, O_RESUME, O_FORCE,
-  O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_MAXW, O_LRSTEPS, O_HELP
+  O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_MAXW, O_LRSTEPS,
+  O_VIS, O_VIS_TILE, O_SPARSE, O_DENSE, O_CACHE, O_HELP
 };
 
 static int parse_int(const char *s, const char *name, int lo, int *out) {
@@ -157,9 +166,14 @@ int mgs_cmd_train(int argc, char **argv) {
     {"freeze", no_argument, 0, O_FREEZE}, {"quiet", no_argument, 0, O_QUIET},
     {"topo-loss", optional_argument, 0, O_TOPO}, {"pers-loss", optional_argument, 0, O_PERS},
     {"normal-loss", optional_argument, 0, O_NORMAL}, {"max-width", required_argument, 0, O_MAXW},
-    {"position-lr-max-steps", required_argument, 0, O_LRSTEPS}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"position-lr-max-steps", required_argument, 0, O_LRSTEPS}, {"help", no_argument, 0, O_HELP},
+    {"visibility", required_argument, 0, O_VIS}, {"vis-tile", required_argument, 0, O_VIS_TILE},
+    {"sparse-adam", no_argument, 0, O_SPARSE}, {"dense-adam", no_argument, 0, O_DENSE},
+    {"image-cache-mb", required_argument, 0, O_CACHE}, {0, 0, 0, 0}};
   mgs_train_options o;
   mgs_train_options_default(&o);
+  o.visibility = -1; /* auto */
+  o.sparse_adam = -1;
   o.checkpoint_every = 1000;
   const char *run = NULL, *strategy = "adc", *init = "sfm", *save_at = "7000";
   int downscale = 1, max_width = 1600, white = -1, test_every = 8, resume = 0, force = 0, threads = 0, quiet = 0, random_points = 100000;
@@ -209,6 +223,26 @@ int mgs_cmd_train(int argc, char **argv) {
       case O_TOPO: fprintf(stderr, "morsegs train: --topo-loss is not available yet (MorseGS persistence loss comes in a later issue)\n"); return 2;
       case O_PERS: fprintf(stderr, "morsegs train: --pers-loss is not available yet (Topology-GS PersLoss comes in a later issue)\n"); return 2;
       case O_NORMAL: fprintf(stderr, "morsegs train: --normal-loss is not available yet (comes in a later issue)\n"); return 2;
+      case O_VIS:
+        if (!strcmp(optarg, "auto")) o.visibility = -1;
+        else if (!strcmp(optarg, "on")) o.visibility = 1;
+        else if (!strcmp(optarg, "off")) o.visibility = 0;
+        else { fprintf(stderr, "morsegs train: --visibility must be auto, on or off (got '%s')\n", optarg); return 2; }
+        break;
+      case O_VIS_TILE: {
+        char *end;
+        o.vis_tile = strtod(optarg, &end);
+        if (!*optarg || *end || !(o.vis_tile > 0) || !isfinite(o.vis_tile)) { fprintf(stderr, "morsegs train: --vis-tile needs a positive number (got '%s')\n", optarg); return 2; }
+        break;
+      }
+      case O_SPARSE: o.sparse_adam = 1; break;
+      case O_DENSE: o.sparse_adam = 0; break;
+      case O_CACHE: {
+        int mb;
+        if (!parse_int(optarg, "--image-cache-mb", 0, &mb)) return 2;
+        o.image_cache_mb = (size_t)mb;
+        break;
+      }
       case 'h': case O_HELP: usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
@@ -304,7 +338,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   dopt.downscale = downscale;
   dopt.max_width = max_width;
   dopt.white_background = white; /* -1: by format */
-  dopt.load_images = 1;
+  dopt.load_images = o.image_cache_mb == 0; /* the cache decodes on demand */
   dopt.test_every = test_every;
   mgs_dataset *ds = NULL;
   int rc = 1;

@@ -71,6 +71,15 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
 mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                   const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                   unsigned group_mask, mgs_error *err);
+/* Sparse Adam (train/adam_sparse.c), a deliberate difference from the reference, which
+ * steps every Gaussian: only rows with radii[i] > 0 (the Gaussians the last view saw) are
+ * stepped; the others keep parameters and moments unchanged. Otherwise as
+ * mgs_adam_step_zero / mgs_adam_step_backward. */
+mgs_status mgs_adam_step_sparse(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad, unsigned group_mask,
+                                const int *radii, int zero_grad, mgs_error *err);
+mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                         const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                         unsigned group_mask, const int *radii, mgs_error *err);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);
@@ -128,6 +137,17 @@ typedef struct mgs_train_options {
   int freeze;                /* 1: never update parameters (calibration of tests) */
   int progress;              /* 1: draw the progress bar */
   mgs_adc_options adc;
+  /* large scenes (train/trainer_scale.c); all off by default */
+  int visibility;            /* 1: project only the spatial tiles a view can see (same images);
+                                -1 auto: on when views see under half the initial model */
+  double vis_tile;           /* tile side in world units, 0 = automatic */
+  int vis_rebin_every;       /* re-bin the tiles every N iterations (200; 0 = only on count changes) */
+  int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the
+                                reference); -1 auto: as the visibility's auto decision */
+  size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
+                                MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
+                                images loaded as floats up front */
+  int prefetch;              /* views decoded ahead by the cache's thread (8; 0 = no thread) */
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 
@@ -179,6 +199,11 @@ double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group);
  * on iterations where the two run fused), 5 loss terms (train/mgs_term.h). */
 #define MGS_TRAIN_PHASES 6
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
+/* Image-cache figures (zeros without a cache): hits, misses, peak resident bytes. */
+void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *misses, size_t *peak_bytes);
+/* Visibility figures: Gaussians projected per iteration (mean so far), occupied tiles,
+ * tile side (0s when visibility is off). */
+void mgs_trainer_visibility_stats(const mgs_trainer *t, double *listed_per_iter, size_t *tiles, double *tile_size);
 /* Mean PSNR and SSIM over a split's views (images loaded on demand). */
 mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views,
                                 double *psnr, double *ssim, mgs_error *err);

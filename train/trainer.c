@@ -26,6 +26,8 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->seed = 0;
   o->checkpoint_every = 0;
   o->progress = 0;
+  o->vis_rebin_every = 200;
+  o->prefetch = 8;
   mgs_adc_options_default(&o->adc);
 }
 
@@ -72,6 +74,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
     mgs_trainer_destroy(t);
     return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
   }
+  if ((st = mgs_trainer_scale_init(t, err))) { mgs_trainer_destroy(t); return st; }
   double ext = ds->extent > 0 ? ds->extent : 1.0;
   t->adam->lr[MGS_PARAM_MEAN] = (float)(o->lr_mean_init * ext);
   t->adam->lr[MGS_PARAM_LOG_SCALE] = o->lr_log_scale;
@@ -83,7 +86,8 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   memcpy(t->rs.background, ds->background, sizeof t->rs.background);
   mgs_rng_init(&t->rng, o->seed, 0x7261696eu);
   shuffle(t);
-  for (size_t i = 0; i < t->perm_len && st == MGS_OK; i++) {
+  /* with an image cache (train/trainer_scale.c) images are decoded on demand instead */
+  for (size_t i = 0; i < t->perm_len && st == MGS_OK && !o->image_cache_mb; i++) {
     mgs_view *v = &ds->views[MGS_SPLIT_TRAIN][i];
     if (!v->image) st = mgs_dataset_load_image(ds, v, err);
     if (st == MGS_OK && (v->image->channels != 3 || v->image->width != v->cam.width || v->image->height != v->cam.height))
@@ -104,6 +108,7 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
   free(t->terms); free(t->term_values);
   mgs_raster_destroy(t->raster);
+  mgs_trainer_scale_destroy(t);
   mgs_progress_destroy(t->progress);
   free(t->perm); free(t->dl); free(t->gm2d);
   free(t);
@@ -192,10 +197,12 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
 
   if (t->perm_pos >= t->perm_len) shuffle(t);
-  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][t->perm[t->perm_pos++]];
+  size_t view_index = t->perm[t->perm_pos++];
+  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][view_index];
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
-  mgs_status st = mgs_raster_forward(t->raster, t->g, &v->cam, &t->rs, &ro, err);
+  t->raster_n = t->g->n;
+  mgs_status st = mgs_trainer_scale_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();
   t->phase_s[0] += t1 - t0;
@@ -203,7 +210,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if ((st = grow_floats(&t->dl, &t->dl_cap, np, err))) return st;
   memset(t->dl, 0, np * sizeof(float));
   const float lam = o->lambda_dssim;
-  const float *gt = v->image->data;
+  const float *gt = NULL;
+  if ((st = mgs_trainer_scale_image(t, view_index, &gt, err))) return st;
   double l1 = mgs_loss_l1(ro.color, gt, ro.width, ro.height, 3, 1.0f - lam, t->dl);
   double ssim = mgs_ssim(ro.color, gt, ro.width, ro.height, 3, -lam, t->dl);
   double loss = (1.0 - lam) * l1 + lam * (1.0 - ssim);
@@ -268,7 +276,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if (fused) st = mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, err);
+  if (fused) st = mgs_trainer_scale_adam_fused(t, ro.radii, all, err);
   else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
@@ -295,7 +303,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   unsigned mask = all & ~ss.replaced_groups;
   if (step_opt && !fused && mask && t->g->n == t->grad->n) {
     int whole = mask == all;
-    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, whole, err);
+    st = mgs_trainer_scale_adam(t, ro.radii, mask, whole, err);
     if (st == MGS_OK && whole) {
       t->grad_clean = 1;
       t->grad_clean_n = t->g->n;
@@ -304,6 +312,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
     if (st) return st;
   }
+  mgs_trainer_scale_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
   t->iteration = it;
   double t5 = mgs_now();
   t->phase_s[4] += t5 - t4;

@@ -41,7 +41,7 @@
 /* ---------------------------------------------------------------- the variant table */
 typedef struct variant_def {
   const char *name;
-  const char *args[4];      /* extra `morsegs train` arguments */
+  const char *args[9];      /* extra `morsegs train` arguments, NULL-terminated */
   const char *knob;         /* densification knob flag, swept for H3 */
   double knob_default;
   int sweep_by_default;     /* one of the densification strategies (ADC, Morse) */
@@ -84,6 +84,8 @@ static void usage(FILE *f) {
     "      --mesh GT          ground-truth mesh (one DATA only; default: DATA/gt_mesh.ply)\n"
     "      --sweep LIST       H3: multipliers of each swept variant's densification knob (0.5,2,4;\n"
     "                         'none' = no sweep); the default run is the multiplier 1\n"
+    "      --variant NAME=ARGS  an extra variant: NAME trained with `morsegs train ... ARGS` (ARGS split at\n"
+    "                         spaces; listed in --variants when that is given)\n"
     "      --sweep-variants LIST  variants swept (default: baseline,morse-d,morse-full)\n"
     "      --sweep-seeds N    seeds per sweep point (1)\n"
     "      --knob V=FLAG:VAL  the knob of variant V is `FLAG` with default VAL (e.g. morse-d=--eps-p:0.02)\n"
@@ -457,7 +459,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -465,19 +467,24 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"mesh", required_argument, 0, O_MESH}, {"sweep", required_argument, 0, O_SWEEP},
     {"sweep-variants", required_argument, 0, O_SWEEP_VARS}, {"sweep-seeds", required_argument, 0, O_SWEEP_SEEDS},
     {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
-    {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
+    {"variant", required_argument, 0, O_VARIANT}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
   e.iters = 30000; e.seeds = 3; e.sweep_seeds = 1; e.topo_res = EXP_TOPO_RES;
   int n_evals = 4, rc = 1, lock_fd = -1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.5,2,4", *sweep_vars = NULL;
-  strlist knobs = {0}, vlist = {0}, svlist = {0};
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0};
+  variant_def custom_defs[16];
+  char custom_buf[16][512];
+  size_t n_custom = 0;
   int c;
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     switch (c) {
       case 'o': e.dir = optarg; break;
       case O_VARIANTS: variants = optarg; break;
+      case O_VARIANT: sl_push(&custom, optarg); break;
       case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds)) return 2; break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
@@ -530,14 +537,33 @@ int mgs_cmd_experiment(int argc, char **argv) {
     sl_free(&l);
   }
   /* variants */
+  /* --variant NAME=ARGS: a variant of the user's (ARGS split at spaces, at most 8) */
+  for (size_t i = 0; i < custom.n; i++) {
+    char *eq = strchr(custom.v[i], '=');
+    if (!eq || eq == custom.v[i] || n_custom == 16 || eq - custom.v[i] >= 64) { fprintf(stderr, "morsegs experiment: --variant needs NAME=ARGS (got '%s', at most 16)\n", custom.v[i]); goto usage_fail; }
+    variant_def *d = &custom_defs[n_custom];
+    memset(d, 0, sizeof *d);
+    snprintf(custom_buf[n_custom], sizeof custom_buf[n_custom], "%s", custom.v[i]);
+    char *b = custom_buf[n_custom], *save = NULL;
+    b[eq - custom.v[i]] = 0;
+    d->name = b;
+    int na = 0;
+    for (char *tok = strtok_r(b + (eq - custom.v[i]) + 1, " ", &save); tok && na < 8; tok = strtok_r(NULL, " ", &save)) d->args[na++] = tok;
+    d->knob = "--grad-threshold";
+    d->knob_default = 2e-4;
+    for (size_t k = 0; k < N_VARIANTS; k++) if (!strcmp(VARIANTS[k].name, d->name)) { fprintf(stderr, "morsegs experiment: --variant %s: a built-in variant has that name\n", d->name); goto usage_fail; }
+    n_custom++;
+  }
   if (variants) sl_split(&vlist, variants);
   else for (size_t i = 0; i < N_VARIANTS; i++) sl_push(&vlist, VARIANTS[i].name);
+  if (!variants) for (size_t i = 0; i < n_custom; i++) sl_push(&vlist, custom_defs[i].name);
   if (sweep_vars) sl_split(&svlist, sweep_vars);
   e.vars = calloc(vlist.n + 1, sizeof *e.vars);
   int have_baseline = 0;
   for (size_t i = 0; i < vlist.n; i++) {
     const variant_def *d = NULL;
     for (size_t k = 0; k < N_VARIANTS; k++) if (!strcmp(vlist.v[i], VARIANTS[k].name)) d = &VARIANTS[k];
+    for (size_t k = 0; k < n_custom; k++) if (!strcmp(vlist.v[i], custom_defs[k].name)) d = &custom_defs[k];
     if (!d) { fprintf(stderr, "morsegs experiment: unknown variant '%s' (see --help)\n", vlist.v[i]); goto usage_fail; }
     for (size_t k = 0; k < e.n_vars; k++) if (e.vars[k].def == d) d = NULL;
     if (!d) continue;
@@ -720,6 +746,9 @@ int mgs_cmd_experiment(int argc, char **argv) {
     } else if (res == 2) {
       mgs_error e2;
       mgs_remove_tree(it->dir, &e2);
+      char *parent = mgs_path_dirname(it->dir);
+      if (parent) rmdir(parent); /* the variant's folder, when this was its only run */
+      free(parent);
       if (it->sweep && it->factor != 1.0 && strcmp(vs->status.status, "not available")) {
         vs->sweep_unavailable = 1;
         snprintf(vs->sweep_reason, sizeof vs->sweep_reason, "%s", reason);
@@ -762,7 +791,7 @@ fail:
   free(e.runs);
   free(e.command_line);
   sl_free(&e.train_args);
-  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom);
   if (lock_fd >= 0) close(lock_fd);
   return rc;
 usage_fail:

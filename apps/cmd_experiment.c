@@ -19,6 +19,7 @@
  * available" with train's message; its rows appear once the trainer accepts the flags. */
 #define _GNU_SOURCE
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
@@ -149,6 +150,27 @@ static void log_reason(const char *log, char *out, size_t n) {
   }
   if (!out[0]) snprintf(out, n, "%s", first);
   fclose(f);
+}
+
+/* Temporary files of atomic writes that a killed experiment left in DIR and DIR/plots (only
+ * names of the form <our output>.tmp-*; the folder is locked, so no writer is running). */
+static void remove_stale_temps(const char *dir) {
+  const char *sub[2] = {"", "plots"};
+  for (int k = 0; k < 2; k++) {
+    char *d = k ? mgs_path_join(dir, sub[k]) : mgs_strdup(dir);
+    DIR *h = d ? opendir(d) : NULL;
+    struct dirent *ent;
+    while (h && (ent = readdir(h))) {
+      if (!strstr(ent->d_name, ".tmp-")) continue;
+      if (strncmp(ent->d_name, "RESULTS.", 8) && strncmp(ent->d_name, "curves.csv", 10) &&
+          strncmp(ent->d_name, "h3.csv", 6) && strncmp(ent->d_name, "experiment.json", 15) && !k) continue;
+      char *p = mgs_path_join(d, ent->d_name);
+      if (p) unlink(p);
+      free(p);
+    }
+    if (h) closedir(h);
+    free(d);
+  }
 }
 
 /* ---------------------------------------------------------------- child processes */
@@ -637,6 +659,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     }
   }
   if (!check_settings(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail; }
+  remove_stale_temps(e.dir);
   ssize_t nl = readlink("/proc/self/exe", g_exe, sizeof g_exe - 1);
   if (nl <= 0) { fprintf(stderr, "morsegs experiment: cannot find its own executable (/proc/self/exe)\n"); goto fail; }
   g_exe[nl] = 0;

@@ -28,7 +28,7 @@ static const double palette[][3] = {{0.12, 0.47, 0.71}, {0.84, 0.15, 0.16}, {0.1
 
 static void draw(cairo_t *cr, int W, int H, const char *title, const char *xl, const char *yl, const exp_series *s,
                  size_t ns, int logy) {
-  const double L = 80, R = 190, T = 36, B = 52;
+  const double L = 96, R = 190, T = 36, B = 52;
   double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
   for (size_t k = 0; k < ns; k++)
     for (size_t i = 0; i < s[k].n; i++) {
@@ -66,7 +66,9 @@ static void draw(cairo_t *cr, int W, int H, const char *title, const char *xl, c
     cairo_move_to(cr, L, PY(v)); cairo_line_to(cr, L + pw, PY(v)); cairo_stroke(cr);
     cairo_set_source_rgb(cr, 0, 0, 0);
     snprintf(buf, sizeof buf, "%.4g", logy ? pow(10, v) : (fabs(v) < 1e-12 * sy ? 0.0 : v));
-    cairo_move_to(cr, 6, PY(v) + 4); cairo_show_text(cr, buf);
+    cairo_text_extents_t te;
+    cairo_text_extents(cr, buf, &te);
+    cairo_move_to(cr, L - 6 - te.x_advance, PY(v) + 4); cairo_show_text(cr, buf); /* right-aligned at the axis */
   }
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_rectangle(cr, L, T, pw, ph);
@@ -75,7 +77,9 @@ static void draw(cairo_t *cr, int W, int H, const char *title, const char *xl, c
   char ylab[160];
   snprintf(ylab, sizeof ylab, "%s%s", yl, logy ? " (log scale)" : "");
   cairo_save(cr);
-  cairo_translate(cr, 14, T + ph / 2 + 3.2 * (double)strlen(ylab));
+  cairo_text_extents_t yt;
+  cairo_text_extents(cr, ylab, &yt);
+  cairo_translate(cr, 16, T + ph / 2 + yt.x_advance / 2);
   cairo_rotate(cr, -M_PI / 2);
   cairo_move_to(cr, 0, 0);
   cairo_show_text(cr, ylab);

@@ -145,6 +145,14 @@ int main(void) {
     snprintf(path, sizeof path, "%s/%s", out, files[i]);
     CHECK_MSG(mgs_path_exists(path), "%s missing", path);
   }
+  /* no temporary file of an interrupted atomic write is left behind */
+  for (int k = 0; k < 2; k++) {
+    snprintf(path, sizeof path, "%s%s", out, k ? "/plots" : "");
+    DIR *d = opendir(path);
+    struct dirent *e;
+    while (d && (e = readdir(d))) CHECK_MSG(!strstr(e->d_name, ".tmp-"), "stale temporary %s/%s", path, e->d_name);
+    if (d) closedir(d);
+  }
   snprintf(path, sizeof path, "%s/runs/ds/bogus", out);
   CHECK_MSG(!mgs_path_exists(path), "an unavailable variant left a run folder");
   char *md = NULL, *csv = NULL, *js = NULL;

@@ -507,14 +507,14 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case 'o': e.dir = optarg; break;
       case O_VARIANTS: variants = optarg; break;
       case O_VARIANT: sl_push(&custom, optarg); break;
-      case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds)) return 2; break;
+      case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
       case O_EVAL_AT: eval_at = optarg; break;
       case O_MESH: mesh = optarg; break;
       case O_SWEEP: sweep = optarg; break;
       case O_SWEEP_VARS: sweep_vars = optarg; break;
-      case O_SWEEP_SEEDS: if (!parse_int(optarg, "--sweep-seeds", 1, &e.sweep_seeds)) return 2; break;
+      case O_SWEEP_SEEDS: if (!parse_int(optarg, "--sweep-seeds", 1, &e.sweep_seeds) || e.sweep_seeds > 64) { fprintf(stderr, "morsegs experiment: --sweep-seeds must be 1..64\n"); return 2; } break;
       case O_KNOB: sl_push(&knobs, optarg); break;
       case O_TRAIN_ARG: sl_push(&e.train_args, optarg); break;
       case O_EVAL_VIEWS: if (!parse_int(optarg, "--eval-views", 1, &e.eval_views)) return 2; break;
@@ -739,7 +739,6 @@ int mgs_cmd_experiment(int argc, char **argv) {
     plan_item *it = &plan[i];
     variant_sel *vs = &e.vars[it->var];
     idx++;
-    const char *what = it->sweep ? "sweep" : "seed";
     char label[512];
     if (it->sweep) snprintf(label, sizeof label, "%s / %s / %s x%g (seed %d)", e.ds[it->ds].name, vs->def->name, vs->knob, it->factor, it->seed);
     else snprintf(label, sizeof label, "%s / %s / seed %d", e.ds[it->ds].name, vs->def->name, it->seed);
@@ -752,7 +751,6 @@ int mgs_cmd_experiment(int argc, char **argv) {
     printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
            todo - idx + 1, eta);
     fflush(stdout);
-    (void)what;
     const double t0 = mgs_now();
     exp_run *r = push_run(&e);
     if (!r) { fprintf(stderr, "morsegs experiment: out of memory\n"); goto fail_plan; }

@@ -130,7 +130,7 @@ static double curve_count_at(const curve_pt *c, int n, double p) {
 /* Verdict of hypothesis h for variant var on dataset ds. */
 static void hypothesis(const exp_report_in *in, const char *ds, const char *var, int h, exp_verdict *v, double *base_mean,
                        double *base_sd) {
-  double ch[64], bm[64], bvals[64];
+  double ch[64], bvals[64];
   int n = 0, nb = 0;
   curve_pt curve[32];
   int nc = h == 3 ? build_curve(in, ds, "baseline", curve, 32) : 0;
@@ -153,10 +153,8 @@ static void hypothesis(const exp_report_in *in, const char *ds, const char *var,
     } else {
       c = mv - mb;
     }
-    bm[n] = mb;
     ch[n++] = c;
   }
-  (void)bm;
   *base_mean = mean_of(bvals, nb);
   *base_sd = sd_of(bvals, nb);
   double spread = HYPS[h].relative ? (*base_mean > 0 ? *base_sd / *base_mean : NAN) : *base_sd;

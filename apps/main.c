@@ -16,6 +16,7 @@ static const command commands[] = {
   {"vdb", mgs_cmd_vdb, "3DGS .ply -> .vdb with density (fog) and sdf (level set) grids"},
   {"persistence", mgs_cmd_persistence, "persistence diagram of a .vdb level set or fog volume"},
   {"bench", mgs_cmd_bench, "benchmarks: run time against error"},
+  {"experiment", mgs_cmd_experiment, "every dataset x variant x seed: H1-H4 verdicts, run time against error"},
 };
 
 static void usage(FILE *f) {

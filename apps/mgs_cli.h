@@ -14,6 +14,7 @@ int mgs_cmd_eval(int argc, char **argv);
 int mgs_cmd_vdb(int argc, char **argv);
 int mgs_cmd_persistence(int argc, char **argv);
 int mgs_cmd_bench(int argc, char **argv);
+int mgs_cmd_experiment(int argc, char **argv);
 
 int mgs_bench_io(int argc, char **argv);
 int mgs_bench_scene(int argc, char **argv);

@@ -1,0 +1,821 @@
+/* morsegs experiment DATA... -o DIR: every dataset x variant x seed trained at the same
+ * iterations by `morsegs train`, evaluated at several points by `morsegs eval` and the
+ * topology measures of apps/cmd_experiment_measure.c, then the H1–H4 verdicts, curves and
+ * tables of apps/cmd_experiment_report.c (SPEC §7, issue 10).
+ *
+ * Each train and eval is a child process of this same binary (/proc/self/exe), one at a
+ * time: a run that crashes, aborts on a numerical error or leaks cannot take the harness
+ * or the next run with it; its output goes to RUN/train.log and RUN/eval.log; Ctrl-C
+ * reaches it as it would reach `morsegs train`; and the child is killed with the harness
+ * (PR_SET_PDEATHSIG), so a killed experiment never leaves a run training behind while the
+ * next invocation starts. DIR/.lock (flock) refuses a second experiment on the same DIR.
+ *
+ * Resume: a run is finished when RUN/result.json exists (written atomically, last);
+ * running again on the same DIR keeps finished runs and redoes unfinished ones from the
+ * start (an interrupted run's wall time would not be comparable).
+ *
+ * Variants are `morsegs train` flag sets (table below). A variant whose flags `morsegs
+ * train` rejects (exit code 2, a usage error, before any training) is reported "not
+ * available" with train's message; its rows appear once the trainer accepts the flags. */
+#define _GNU_SOURCE
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <getopt.h>
+#include <limits.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cjson/cJSON.h>
+#include "apps/mgs_cli.h"
+#include "apps/mgs_experiment.h"
+#include "core/mgs_core.h"
+
+/* ---------------------------------------------------------------- the variant table */
+typedef struct variant_def {
+  const char *name;
+  const char *args[9];      /* extra `morsegs train` arguments, NULL-terminated */
+  const char *knob;         /* densification knob flag, swept for H3 */
+  double knob_default;
+  int sweep_by_default;     /* one of the densification strategies (ADC, Morse) */
+} variant_def;
+
+static const variant_def VARIANTS[] = {
+  {"baseline", {NULL}, "--grad-threshold", 2e-4, 1},
+  {"morse-d", {"--preset", "morse-d", NULL}, "--eps-p", 0.02, 1},
+  {"morse-r", {"--preset", "morse-r", NULL}, "--grad-threshold", 2e-4, 0},
+  {"morse-i", {"--preset", "morse-i", NULL}, "--grad-threshold", 2e-4, 0},
+  {"morse-full", {"--preset", "morse-full", NULL}, "--eps-p", 0.02, 1},
+  {"morse-d-literal", {"--preset", "morse-d", "--literal", NULL}, "--eps-p", 0.02, 0},
+  {"morse-r-literal", {"--preset", "morse-r", "--literal", NULL}, "--grad-threshold", 2e-4, 0},
+  {"morse-i-literal", {"--preset", "morse-i", "--literal", NULL}, "--grad-threshold", 2e-4, 0},
+  {"morse-full-literal", {"--preset", "morse-full", "--literal", NULL}, "--eps-p", 0.02, 0},
+  {"topology-gs", {"--preset", "topology-gs", NULL}, "--grad-threshold", 2e-4, 0},
+};
+#define N_VARIANTS (sizeof VARIANTS / sizeof VARIANTS[0])
+
+static volatile sig_atomic_t g_stop = 0;
+static void on_signal(int sig) { (void)sig; g_stop = 1; }
+
+static void usage(FILE *f) {
+  fprintf(f,
+    "usage: morsegs experiment DATA... -o DIR [options]\n"
+    "  Trains every DATA x variant x seed with `morsegs train` (one at a time), evaluates each at\n"
+    "  several points with `morsegs eval` plus topology measures against the GT mesh, and writes\n"
+    "  DIR/RESULTS.md, DIR/RESULTS.json (H1-H4 verdicts), DIR/curves.csv, DIR/h3.csv and plots\n"
+    "  DIR/plots/*.{png,svg}. Running again on the same DIR keeps finished runs.\n"
+    "  DATA: a dataset folder (NeRF-synthetic, nerfstudio, COLMAP); GT mesh: its gt_mesh.ply or --mesh\n"
+    "  -o, --output DIR       experiment folder (created; reused to resume)\n"
+    "      --variants LIST    comma-separated (default: all):\n"
+    "                         ");
+  for (size_t i = 0; i < N_VARIANTS; i++) fprintf(f, "%s%s", VARIANTS[i].name, i + 1 < N_VARIANTS ? "," : "\n");
+  fprintf(f,
+    "      --seeds N          seeds 0..N-1 per variant (3)\n"
+    "      --iters N          training iterations of every run (30000)\n"
+    "      --evals N          evaluation points, evenly spaced, the last at --iters (4)\n"
+    "      --eval-at LIST     evaluation iterations instead (the final one is always added)\n"
+    "      --mesh GT          ground-truth mesh (one DATA only; default: DATA/gt_mesh.ply)\n"
+    "      --sweep LIST       H3: multipliers of each swept variant's densification knob (0.5,2,4;\n"
+    "                         'none' = no sweep); the default run is the multiplier 1\n"
+    "      --variant NAME=ARGS  an extra variant: NAME trained with `morsegs train ... ARGS` (ARGS split at\n"
+    "                         spaces; listed in --variants when that is given)\n"
+    "      --sweep-variants LIST  variants swept (default: baseline,morse-d,morse-full)\n"
+    "      --sweep-seeds N    seeds per sweep point (1)\n"
+    "      --knob V=FLAG:VAL  the knob of variant V is `FLAG` with default VAL (e.g. morse-d=--eps-p:0.02)\n"
+    "      --train-arg ARG    extra argument for every `morsegs train` (repeatable, e.g. --train-arg=--sh-degree=1)\n"
+    "      --eval-views N     evaluate at most N test views (all)\n"
+    "      --topo-res N       topology measures: SDF voxel = GT bounding-box diagonal / N (256)\n"
+    "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
+    "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
+}
+
+/* ---------------------------------------------------------------- small helpers */
+typedef struct strlist { char **v; size_t n; } strlist;
+static void sl_push(strlist *l, const char *s) {
+  char **p = realloc(l->v, (l->n + 1) * sizeof *p);
+  if (!p) return;
+  l->v = p;
+  l->v[l->n++] = mgs_strdup(s);
+}
+static void sl_free(strlist *l) {
+  for (size_t i = 0; i < l->n; i++) free(l->v[i]);
+  free(l->v);
+  l->v = NULL; l->n = 0;
+}
+static void sl_split(strlist *l, const char *csv) {
+  char *dup = mgs_strdup(csv), *save = NULL;
+  for (char *t = strtok_r(dup, ",", &save); t; t = strtok_r(NULL, ",", &save))
+    if (*t) sl_push(l, t);
+  free(dup);
+}
+
+static void fmt_duration(double s, char *buf, size_t n) {
+  if (!(s >= 0) || !isfinite(s)) { snprintf(buf, n, "?"); return; }
+  long t = (long)(s + 0.5);
+  if (t >= 3600) snprintf(buf, n, "%ldh%02ldm", t / 3600, (t / 60) % 60);
+  else snprintf(buf, n, "%ldm%02lds", t / 60, t % 60);
+}
+
+static double load_avg(void) {
+  double l = NAN;
+  FILE *f = fopen("/proc/loadavg", "r");
+  if (f) { if (fscanf(f, "%lf", &l) != 1) l = NAN; fclose(f); }
+  return l;
+}
+
+static double mtime_of(const char *path) {
+  struct stat sb;
+  if (stat(path, &sb) != 0) return NAN;
+  return (double)sb.st_mtim.tv_sec + 1e-9 * (double)sb.st_mtim.tv_nsec;
+}
+
+/* First line of a log that names the problem (train's own message, else getopt's). */
+static void log_reason(const char *log, char *out, size_t n) {
+  out[0] = 0;
+  FILE *f = fopen(log, "r");
+  if (!f) return;
+  char line[1024], first[1024] = "";
+  while (fgets(line, sizeof line, f)) {
+    line[strcspn(line, "\n")] = 0;
+    if (!first[0] && line[0]) snprintf(first, sizeof first, "%s", line);
+    if (!strncmp(line, "morsegs", 7)) { snprintf(out, n, "%s", line); break; }
+  }
+  if (!out[0]) snprintf(out, n, "%s", first);
+  fclose(f);
+}
+
+/* Temporary files of atomic writes that a killed experiment left in DIR and DIR/plots (only
+ * names of the form <our output>.tmp-*; the folder is locked, so no writer is running). */
+static void remove_stale_temps(const char *dir) {
+  const char *sub[2] = {"", "plots"};
+  for (int k = 0; k < 2; k++) {
+    char *d = k ? mgs_path_join(dir, sub[k]) : mgs_strdup(dir);
+    DIR *h = d ? opendir(d) : NULL;
+    struct dirent *ent;
+    while (h && (ent = readdir(h))) {
+      if (!strstr(ent->d_name, ".tmp-")) continue;
+      if (strncmp(ent->d_name, "RESULTS.", 8) && strncmp(ent->d_name, "curves.csv", 10) &&
+          strncmp(ent->d_name, "h3.csv", 6) && strncmp(ent->d_name, "experiment.json", 15) && !k) continue;
+      char *p = mgs_path_join(d, ent->d_name);
+      if (p) unlink(p);
+      free(p);
+    }
+    if (h) closedir(h);
+    free(d);
+  }
+}
+
+/* ---------------------------------------------------------------- child processes */
+static char g_exe[PATH_MAX];
+
+/* Runs `morsegs ARGS...` with stdout/stderr appended to log; returns its exit code (128+sig
+ * when killed by a signal, -1 when it could not start). Forwards SIGINT on Ctrl-C/SIGTERM. */
+static int run_child(char *const argv[], const char *log) {
+  pid_t parent = getpid();
+  fflush(stdout);
+  fflush(stderr);
+  pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(127);
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    int fd = open(log, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); }
+    execv(g_exe, argv);
+    _exit(127);
+  }
+  int status = 0, forwarded = 0;
+  for (;;) {
+    pid_t r = waitpid(pid, &status, 0);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) return -1;
+    if (g_stop && !forwarded) { kill(pid, SIGINT); forwarded = 1; }
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return -1;
+}
+
+/* ---------------------------------------------------------------- the plan */
+typedef struct plan_item {
+  size_t ds, var;
+  int seed;
+  double factor;
+  int sweep;
+  char dir[PATH_MAX];
+} plan_item;
+
+typedef struct dataset_in {
+  char name[EXP_NAME];
+  char path[PATH_MAX];
+  char mesh[PATH_MAX];
+  exp_truth truth;
+} dataset_in;
+
+typedef struct variant_sel {
+  const variant_def *def;
+  char knob[64];
+  double knob_default;
+  int sweep;
+  exp_variant_status status;
+  int sweep_unavailable;
+  char sweep_reason[1024];
+} variant_sel;
+
+typedef struct experiment {
+  const char *dir;
+  int iters, seeds, sweep_seeds, eval_views, topo_res;
+  int evals[EXP_MAX_POINTS];
+  int n_evals;
+  double sweep[16];
+  int n_sweep;
+  strlist train_args;
+  dataset_in *ds;
+  size_t n_ds;
+  variant_sel *vars;
+  size_t n_vars;
+  exp_run *runs;
+  size_t n_runs, cap_runs;
+  char *command_line;
+  double load_start;
+  size_t planned;
+  int failures;
+} experiment;
+
+static exp_run *push_run(experiment *e) {
+  if (e->n_runs == e->cap_runs) {
+    size_t cap = e->cap_runs ? 2 * e->cap_runs : 16;
+    exp_run *p = realloc(e->runs, cap * sizeof *p);
+    if (!p) return NULL;
+    e->runs = p;
+    e->cap_runs = cap;
+  }
+  exp_run *r = &e->runs[e->n_runs++];
+  memset(r, 0, sizeof *r);
+  return r;
+}
+
+static mgs_status write_report(experiment *e, mgs_error *err) {
+  const char **names = calloc(e->n_ds ? e->n_ds : 1, sizeof *names);
+  exp_truth *truths = calloc(e->n_ds ? e->n_ds : 1, sizeof *truths);
+  exp_variant_status *vs = calloc(e->n_vars ? e->n_vars : 1, sizeof *vs);
+  if (!names || !truths || !vs) { free(names); free(truths); free(vs); return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); }
+  for (size_t i = 0; i < e->n_ds; i++) { names[i] = e->ds[i].name; truths[i] = e->ds[i].truth; }
+  char knobs[4096] = "";
+  for (size_t v = 0; v < e->n_vars; v++) {
+    vs[v] = e->vars[v].status;
+    if (e->vars[v].sweep && e->n_sweep) {
+      size_t l = strlen(knobs);
+      snprintf(knobs + l, sizeof knobs - l, "%s%s: %s %g x {1", l ? "; " : "", e->vars[v].def->name, e->vars[v].knob,
+               e->vars[v].knob_default);
+      for (int k = 0; k < e->n_sweep; k++) { l = strlen(knobs); snprintf(knobs + l, sizeof knobs - l, ", %g", e->sweep[k]); }
+      l = strlen(knobs);
+      snprintf(knobs + l, sizeof knobs - l, "}%s%.300s", e->vars[v].sweep_unavailable ? " (not available: " : "",
+               e->vars[v].sweep_unavailable ? e->vars[v].sweep_reason : "");
+      if (e->vars[v].sweep_unavailable) { l = strlen(knobs); snprintf(knobs + l, sizeof knobs - l, ")"); }
+    }
+  }
+  exp_report_in in = {.dir = e->dir, .command_line = e->command_line, .iters = e->iters, .seeds = e->seeds,
+                      .knob_desc = knobs, .n_datasets = e->n_ds, .dataset_names = names, .truths = truths,
+                      .n_variants = e->n_vars, .variants = vs, .n_runs = e->n_runs, .runs = e->runs,
+                      .planned_runs = e->planned, .load_start = e->load_start};
+  mgs_status st = exp_report_write(&in, err);
+  free(names); free(truths); free(vs);
+  return st;
+}
+
+/* Trains and evaluates one run; returns 0 done, 1 failed (recorded), 2 variant not
+ * available, 3 interrupted. */
+static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason, size_t reason_n) {
+  const variant_sel *vs = &e->vars[it->var];
+  const dataset_in *ds = &e->ds[it->ds];
+  mgs_error err;
+  mgs_error_clear(&err);
+  reason[0] = 0;
+  if (mgs_is_dir(it->dir) && mgs_remove_tree(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); return 1; }
+  if (mgs_mkdir_p(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); return 1; }
+  char *tlog = mgs_path_join(it->dir, "train.log"), *elog = mgs_path_join(it->dir, "eval.log");
+  /* train */
+  char iters_s[32], seed_s[32], knob_s[64], save_s[512] = "";
+  snprintf(iters_s, sizeof iters_s, "%d", e->iters);
+  snprintf(seed_s, sizeof seed_s, "%d", it->seed);
+  snprintf(knob_s, sizeof knob_s, "%.6g", vs->knob_default * it->factor);
+  if (!it->sweep)
+    for (int k = 0; k < e->n_evals; k++)
+      if (e->evals[k] < e->iters) {
+        size_t l = strlen(save_s);
+        snprintf(save_s + l, sizeof save_s - l, "%s%d", l ? "," : "", e->evals[k]);
+      }
+  const char *argv[64];
+  int a = 0;
+  argv[a++] = "morsegs"; argv[a++] = "train"; argv[a++] = ds->path; argv[a++] = "-o"; argv[a++] = it->dir;
+  argv[a++] = "--iters"; argv[a++] = iters_s; argv[a++] = "--seed"; argv[a++] = seed_s;
+  argv[a++] = "--save-at"; argv[a++] = save_s; argv[a++] = "--checkpoint-every"; argv[a++] = "0";
+  argv[a++] = "--force"; argv[a++] = "--quiet";
+  for (int k = 0; vs->def->args[k] && a < 40; k++) argv[a++] = vs->def->args[k];
+  if (it->factor != 1.0) { argv[a++] = vs->knob; argv[a++] = knob_s; }
+  for (size_t k = 0; k < e->train_args.n && a < 62; k++) argv[a++] = e->train_args.v[k];
+  argv[a] = NULL;
+  int rc = run_child((char *const *)argv, tlog);
+  int result = 0;
+  if (g_stop || rc == 130) { result = 3; goto done; }
+  if (rc == 2) {
+    log_reason(tlog, reason, reason_n);
+    result = 2;
+    goto done;
+  }
+  if (rc != 0) {
+    log_reason(tlog, reason, reason_n);
+    if (!reason[0]) snprintf(reason, reason_n, "morsegs train exited with code %d (see %s)", rc, tlog);
+    result = 1;
+    goto done;
+  }
+  memset(out, 0, sizeof *out);
+  snprintf(out->dataset, sizeof out->dataset, "%s", ds->name);
+  snprintf(out->variant, sizeof out->variant, "%s", vs->def->name);
+  out->seed = it->seed;
+  out->factor = it->factor;
+  out->iters = e->iters;
+  out->train_seconds = out->analysis_seconds = NAN;
+  {
+    char *sp = mgs_path_join(it->dir, "train_stats.json"), *text = NULL;
+    size_t n;
+    if (sp && mgs_read_file(sp, &text, &n, NULL) == MGS_OK) {
+      cJSON *j = cJSON_Parse(text);
+      const cJSON *t = cJSON_GetObjectItem(j, "train_seconds"), *an = cJSON_GetObjectItem(j, "analysis_seconds");
+      if (cJSON_IsNumber(t)) out->train_seconds = t->valuedouble;
+      if (cJSON_IsNumber(an)) out->analysis_seconds = an->valuedouble;
+      cJSON_Delete(j);
+    }
+    free(text);
+    free(sp);
+    if (!isfinite(out->train_seconds)) { snprintf(reason, reason_n, "%s: no train_seconds in train_stats.json", it->dir); result = 1; goto done; }
+  }
+  char fin_ply[PATH_MAX + 64];
+  snprintf(fin_ply, sizeof fin_ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, e->iters);
+  const double t_final = mtime_of(fin_ply);
+  /* evaluation points */
+  for (int k = 0; k < e->n_evals; k++) {
+    int iter = e->evals[k];
+    if (it->sweep && iter != e->iters) continue;
+    char ply[PATH_MAX + 64];
+    snprintf(ply, sizeof ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, iter);
+    if (!mgs_path_exists(ply)) continue;
+    char iter_s[32], views_s[32];
+    snprintf(iter_s, sizeof iter_s, "%d", iter);
+    snprintf(views_s, sizeof views_s, "%d", e->eval_views);
+    const char *ev[16];
+    int b = 0;
+    ev[b++] = "morsegs"; ev[b++] = "eval"; ev[b++] = it->dir; ev[b++] = "--iteration"; ev[b++] = iter_s;
+    ev[b++] = "--no-images";
+    if (ds->mesh[0]) { ev[b++] = "--mesh"; ev[b++] = ds->mesh; }
+    if (e->eval_views > 0) { ev[b++] = "--max-views"; ev[b++] = views_s; }
+    ev[b] = NULL;
+    rc = run_child((char *const *)ev, elog);
+    if (g_stop || rc == 130) { result = 3; goto done; }
+    if (rc != 0) {
+      log_reason(elog, reason, reason_n);
+      if (!reason[0]) snprintf(reason, reason_n, "morsegs eval exited with code %d (see %s)", rc, elog);
+      result = 1;
+      goto done;
+    }
+    exp_point *p = &out->pt[out->n_points];
+    memset(p, 0, sizeof *p);
+    p->iteration = iter;
+    const double m0 = mgs_now();
+    if (exp_read_eval(it->dir, iter, p, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; goto done; }
+    /* keep eval's own record of this point beside the run */
+    {
+      char *rp = mgs_path_join(it->dir, "results.json"), *text = NULL, name[64];
+      size_t n;
+      snprintf(name, sizeof name, "eval_%d.json", iter);
+      char *cp = mgs_path_join(it->dir, name);
+      if (rp && cp && mgs_read_file(rp, &text, &n, NULL) == MGS_OK) mgs_write_file_atomic(cp, text, n, NULL);
+      free(text); free(rp); free(cp);
+    }
+    /* training wall time at this save: the trainer's total minus the time between this
+       .ply and the final one (the final .ply is written right after the last iteration) */
+    double tn = mtime_of(ply);
+    p->wall_seconds = isfinite(t_final) && isfinite(tn) ? fmax(0.0, out->train_seconds - (t_final - tn)) : NAN;
+    if (iter == e->iters) p->wall_seconds = out->train_seconds;
+    for (int q = 0; q < 3; q++) p->betti[q] = p->betti_persistent[q] = -1;
+    p->floater_mass = p->floater_mass_fraction = p->bottleneck = NAN;
+    if (!it->sweep && exp_measure_topology(ply, &ds->truth, p, &err)) {
+      snprintf(reason, reason_n, "topology of %.400s: %.600s", ply, err.msg);
+      result = 1;
+      goto done;
+    }
+    p->measure_seconds = mgs_now() - m0;
+    out->n_points++;
+  }
+  if (out->n_points == 0) { snprintf(reason, reason_n, "%s: no saved model to evaluate", it->dir); result = 1; goto done; }
+  {
+    char *rp = mgs_path_join(it->dir, "result.json");
+    if (exp_run_write(rp, out, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; }
+    free(rp);
+  }
+done:
+  free(tlog);
+  free(elog);
+  return result;
+}
+
+/* ---------------------------------------------------------------- the command */
+static int parse_int(const char *s, const char *name, int lo, int *out) {
+  char *end;
+  long v = strtol(s, &end, 10);
+  if (!*s || *end || v < lo || v > INT_MAX) {
+    fprintf(stderr, "morsegs experiment: %s needs an integer >= %d (got '%s')\n", name, lo, s);
+    return 0;
+  }
+  *out = (int)v;
+  return 1;
+}
+
+static int cmp_int(const void *a, const void *b) { return (*(const int *)a > *(const int *)b) - (*(const int *)a < *(const int *)b); }
+
+/* DIR/experiment.json: the settings every run of DIR must share. */
+static int check_settings(experiment *e, mgs_error *err) {
+  char *path = mgs_path_join(e->dir, "experiment.json"), *text = NULL;
+  size_t n;
+  int ok = 1;
+  if (mgs_path_exists(path)) {
+    if (mgs_read_file(path, &text, &n, err) != MGS_OK) { free(path); return 0; }
+    cJSON *j = cJSON_Parse(text);
+    const cJSON *it = cJSON_GetObjectItem(j, "iterations"), *ev = cJSON_GetObjectItem(j, "evaluations");
+    const cJSON *tr = cJSON_GetObjectItem(j, "topo_res");
+    int same = cJSON_IsNumber(it) && it->valueint == e->iters && cJSON_IsArray(ev) && cJSON_GetArraySize(ev) == e->n_evals &&
+               cJSON_IsNumber(tr) && tr->valueint == e->topo_res;
+    for (int k = 0; same && k < e->n_evals; k++) same = cJSON_GetArrayItem(ev, k)->valueint == e->evals[k];
+    if (!same) {
+      mgs_error_set(err, MGS_ERR_ARG, "%s: this folder holds an experiment with other iterations or evaluation points (%s); "
+                    "use another -o DIR or the same --iters/--evals/--topo-res", e->dir, text);
+      ok = 0;
+    }
+    cJSON_Delete(j);
+    free(text);
+  } else {
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddStringToObject(j, "format", "morsegs-experiment");
+    cJSON_AddNumberToObject(j, "iterations", e->iters);
+    cJSON_AddItemToObject(j, "evaluations", cJSON_CreateIntArray(e->evals, e->n_evals));
+    cJSON_AddNumberToObject(j, "topo_res", e->topo_res);
+    char *t = cJSON_PrintUnformatted(j);
+    cJSON_Delete(j);
+    ok = t && mgs_write_file_atomic(path, t, strlen(t), err) == MGS_OK;
+    free(t);
+  }
+  free(path);
+  return ok;
+}
+
+int mgs_cmd_experiment(int argc, char **argv) {
+  enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_HELP };
+  static const struct option opts[] = {
+    {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
+    {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
+    {"evals", required_argument, 0, O_EVALS}, {"eval-at", required_argument, 0, O_EVAL_AT},
+    {"mesh", required_argument, 0, O_MESH}, {"sweep", required_argument, 0, O_SWEEP},
+    {"sweep-variants", required_argument, 0, O_SWEEP_VARS}, {"sweep-seeds", required_argument, 0, O_SWEEP_SEEDS},
+    {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
+    {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
+    {"variant", required_argument, 0, O_VARIANT}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+  experiment e;
+  memset(&e, 0, sizeof e);
+  e.iters = 30000; e.seeds = 3; e.sweep_seeds = 1; e.topo_res = EXP_TOPO_RES;
+  int n_evals = 4, rc = 1, lock_fd = -1;
+  const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.5,2,4", *sweep_vars = NULL;
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0};
+  variant_def custom_defs[16];
+  char custom_buf[16][512];
+  size_t n_custom = 0;
+  int c;
+  optind = 1;
+  while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    switch (c) {
+      case 'o': e.dir = optarg; break;
+      case O_VARIANTS: variants = optarg; break;
+      case O_VARIANT: sl_push(&custom, optarg); break;
+      case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
+      case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
+      case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
+      case O_EVAL_AT: eval_at = optarg; break;
+      case O_MESH: mesh = optarg; break;
+      case O_SWEEP: sweep = optarg; break;
+      case O_SWEEP_VARS: sweep_vars = optarg; break;
+      case O_SWEEP_SEEDS: if (!parse_int(optarg, "--sweep-seeds", 1, &e.sweep_seeds) || e.sweep_seeds > 64) { fprintf(stderr, "morsegs experiment: --sweep-seeds must be 1..64\n"); return 2; } break;
+      case O_KNOB: sl_push(&knobs, optarg); break;
+      case O_TRAIN_ARG: sl_push(&e.train_args, optarg); break;
+      case O_EVAL_VIEWS: if (!parse_int(optarg, "--eval-views", 1, &e.eval_views)) return 2; break;
+      case O_TOPO_RES: if (!parse_int(optarg, "--topo-res", 16, &e.topo_res) || e.topo_res > 4096) { fprintf(stderr, "morsegs experiment: --topo-res must be 16..4096\n"); return 2; } break;
+      case 'h': case O_HELP: usage(stdout); return 0;
+      default: usage(stderr); return 2;
+    }
+  }
+  if (!e.dir) { fprintf(stderr, "morsegs experiment: -o DIR is required\n"); usage(stderr); return 2; }
+  if (optind >= argc) { fprintf(stderr, "morsegs experiment: at least one DATA folder is expected\n"); usage(stderr); return 2; }
+  if (mesh && argc - optind != 1) { fprintf(stderr, "morsegs experiment: --mesh applies to one DATA (with several, each dataset's gt_mesh.ply is used)\n"); return 2; }
+  if (mesh && !mgs_path_exists(mesh)) { fprintf(stderr, "morsegs experiment: --mesh %s: file not found\n", mesh); return 2; }
+  /* evaluation points */
+  if (eval_at) {
+    strlist l = {0};
+    sl_split(&l, eval_at);
+    for (size_t i = 0; i < l.n; i++) {
+      int v;
+      if (!parse_int(l.v[i], "--eval-at", 1, &v)) { sl_free(&l); return 2; }
+      if (v < e.iters && e.n_evals < EXP_MAX_POINTS - 1) e.evals[e.n_evals++] = v;
+    }
+    sl_free(&l);
+    e.evals[e.n_evals++] = e.iters;
+  } else {
+    for (int k = 1; k <= n_evals; k++) {
+      int v = (int)((long long)e.iters * k / n_evals);
+      if (v >= 1) e.evals[e.n_evals++] = v;
+    }
+  }
+  qsort(e.evals, (size_t)e.n_evals, sizeof(int), cmp_int);
+  { int m = 0; for (int k = 0; k < e.n_evals; k++) if (!m || e.evals[k] != e.evals[m - 1]) e.evals[m++] = e.evals[k]; e.n_evals = m; }
+  /* sweep multipliers */
+  if (strcmp(sweep, "none") && *sweep) {
+    strlist l = {0};
+    sl_split(&l, sweep);
+    for (size_t i = 0; i < l.n; i++) {
+      char *end;
+      double f = strtod(l.v[i], &end);
+      if (*end || !(f > 0) || !isfinite(f)) { fprintf(stderr, "morsegs experiment: --sweep needs positive multipliers (got '%s')\n", l.v[i]); sl_free(&l); return 2; }
+      if (f != 1.0 && e.n_sweep < 16) e.sweep[e.n_sweep++] = f;
+    }
+    sl_free(&l);
+  }
+  /* variants */
+  /* --variant NAME=ARGS: a variant of the user's (ARGS split at spaces, at most 8) */
+  for (size_t i = 0; i < custom.n; i++) {
+    char *eq = strchr(custom.v[i], '=');
+    if (!eq || eq == custom.v[i] || n_custom == 16 || eq - custom.v[i] >= 64) { fprintf(stderr, "morsegs experiment: --variant needs NAME=ARGS (got '%s', at most 16)\n", custom.v[i]); goto usage_fail; }
+    variant_def *d = &custom_defs[n_custom];
+    memset(d, 0, sizeof *d);
+    snprintf(custom_buf[n_custom], sizeof custom_buf[n_custom], "%s", custom.v[i]);
+    char *b = custom_buf[n_custom], *save = NULL;
+    b[eq - custom.v[i]] = 0;
+    d->name = b;
+    int na = 0;
+    for (char *tok = strtok_r(b + (eq - custom.v[i]) + 1, " ", &save); tok && na < 8; tok = strtok_r(NULL, " ", &save)) d->args[na++] = tok;
+    d->knob = "--grad-threshold";
+    d->knob_default = 2e-4;
+    for (size_t k = 0; k < N_VARIANTS; k++) if (!strcmp(VARIANTS[k].name, d->name)) { fprintf(stderr, "morsegs experiment: --variant %s: a built-in variant has that name\n", d->name); goto usage_fail; }
+    n_custom++;
+  }
+  if (variants) sl_split(&vlist, variants);
+  else for (size_t i = 0; i < N_VARIANTS; i++) sl_push(&vlist, VARIANTS[i].name);
+  if (!variants) for (size_t i = 0; i < n_custom; i++) sl_push(&vlist, custom_defs[i].name);
+  if (sweep_vars) sl_split(&svlist, sweep_vars);
+  e.vars = calloc(vlist.n + 1, sizeof *e.vars);
+  int have_baseline = 0;
+  for (size_t i = 0; i < vlist.n; i++) {
+    const variant_def *d = NULL;
+    for (size_t k = 0; k < N_VARIANTS; k++) if (!strcmp(vlist.v[i], VARIANTS[k].name)) d = &VARIANTS[k];
+    for (size_t k = 0; k < n_custom; k++) if (!strcmp(vlist.v[i], custom_defs[k].name)) d = &custom_defs[k];
+    if (!d) { fprintf(stderr, "morsegs experiment: unknown variant '%s' (see --help)\n", vlist.v[i]); goto usage_fail; }
+    for (size_t k = 0; k < e.n_vars; k++) if (e.vars[k].def == d) d = NULL;
+    if (!d) continue;
+    variant_sel *s = &e.vars[e.n_vars++];
+    s->def = d;
+    snprintf(s->knob, sizeof s->knob, "%s", d->knob);
+    s->knob_default = d->knob_default;
+    s->sweep = d->sweep_by_default;
+    if (sweep_vars) { s->sweep = 0; for (size_t k = 0; k < svlist.n; k++) if (!strcmp(svlist.v[k], d->name)) s->sweep = 1; }
+    snprintf(s->status.name, sizeof s->status.name, "%s", d->name);
+    snprintf(s->status.status, sizeof s->status.status, "pending");
+    if (!strcmp(d->name, "baseline")) have_baseline = 1;
+  }
+  if (!have_baseline) { fprintf(stderr, "morsegs experiment: --variants must include baseline (every change is measured against it)\n"); goto usage_fail; }
+  for (size_t i = 0; i < svlist.n; i++) {
+    int found = 0;
+    for (size_t k = 0; k < e.n_vars; k++) found |= !strcmp(svlist.v[i], e.vars[k].def->name);
+    if (!found) { fprintf(stderr, "morsegs experiment: --sweep-variants: '%s' is not among --variants\n", svlist.v[i]); goto usage_fail; }
+  }
+  for (size_t i = 0; i < knobs.n; i++) {
+    char *eq = strchr(knobs.v[i], '='), *colon = eq ? strrchr(eq, ':') : NULL;
+    double val = colon ? strtod(colon + 1, NULL) : 0;
+    if (!eq || !colon || strncmp(eq + 1, "--", 2) || !(val > 0)) { fprintf(stderr, "morsegs experiment: --knob needs VARIANT=--FLAG:VALUE (got '%s')\n", knobs.v[i]); goto usage_fail; }
+    *eq = 0; *colon = 0;
+    int found = 0;
+    for (size_t k = 0; k < e.n_vars; k++)
+      if (!strcmp(e.vars[k].def->name, knobs.v[i])) { snprintf(e.vars[k].knob, sizeof e.vars[k].knob, "%s", eq + 1); e.vars[k].knob_default = val; found = 1; }
+    if (!found) { fprintf(stderr, "morsegs experiment: --knob: '%s' is not among --variants\n", knobs.v[i]); goto usage_fail; }
+  }
+  /* datasets */
+  e.n_ds = (size_t)(argc - optind);
+  e.ds = calloc(e.n_ds, sizeof *e.ds);
+  {
+    size_t cl = 16;
+    for (int i = 0; i < argc; i++) cl += strlen(argv[i]) + 3;
+    e.command_line = malloc(cl);
+    strcpy(e.command_line, "morsegs");
+    for (int i = 0; i < argc; i++) { strcat(e.command_line, " "); strcat(e.command_line, argv[i]); }
+  }
+  mgs_error err;
+  mgs_error_clear(&err);
+  for (size_t i = 0; i < e.n_ds; i++) {
+    const char *p = argv[optind + (int)i];
+    dataset_in *d = &e.ds[i];
+    if (!mgs_is_dir(p)) { fprintf(stderr, "morsegs experiment: %s: dataset folder not found\n", p); goto fail; }
+    if (!realpath(p, d->path)) snprintf(d->path, sizeof d->path, "%s", p);
+    mgs_dataset_options o;
+    mgs_dataset_options_default(&o);
+    o.load_images = 0;
+    mgs_dataset *dd = NULL;
+    if (mgs_dataset_load(p, &o, &dd, &err)) { mgs_cli_fail("experiment", &err); goto fail; }
+    const char *m = mesh ? mesh : dd->mesh_path;
+    if (m && !realpath(m, d->mesh)) snprintf(d->mesh, sizeof d->mesh, "%s", m);
+    mgs_dataset_destroy(dd);
+    const char *base = strrchr(d->path, '/');
+    snprintf(d->name, sizeof d->name, "%.100s", base && base[1] ? base + 1 : d->path);
+    for (char *q = d->name; *q; q++) if (!(isalnum((unsigned char)*q) || *q == '-' || *q == '_' || *q == '.')) *q = '_';
+    for (size_t k = 0; k < i; k++)
+      if (!strcmp(e.ds[k].name, d->name)) { size_t l = strlen(d->name); snprintf(d->name + (l > 100 ? 100 : l), 20, "_%d", (int)(i % 10000) + 1); }
+  }
+  /* the folder, its lock and its settings */
+  if (mgs_path_exists(e.dir) && !mgs_is_dir(e.dir)) { fprintf(stderr, "morsegs experiment: %s: exists and is not a folder\n", e.dir); goto fail; }
+  if (mgs_mkdir_p(e.dir, &err)) { mgs_cli_fail("experiment", &err); goto fail; }
+  {
+    char *lp = mgs_path_join(e.dir, ".lock");
+    lock_fd = open(lp, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    free(lp);
+    if (lock_fd < 0 || flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+      fprintf(stderr, "morsegs experiment: %s: another experiment is running in this folder (it is locked)\n", e.dir);
+      goto fail;
+    }
+  }
+  if (!check_settings(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail; }
+  remove_stale_temps(e.dir);
+  ssize_t nl = readlink("/proc/self/exe", g_exe, sizeof g_exe - 1);
+  if (nl <= 0) { fprintf(stderr, "morsegs experiment: cannot find its own executable (/proc/self/exe)\n"); goto fail; }
+  g_exe[nl] = 0;
+  e.load_start = load_avg();
+  /* ground truth per dataset */
+  for (size_t i = 0; i < e.n_ds; i++) {
+    dataset_in *d = &e.ds[i];
+    char sub[EXP_NAME + 16];
+    snprintf(sub, sizeof sub, "datasets/%s", d->name);
+    char *sd = mgs_path_join(e.dir, sub);
+    if (mgs_mkdir_p(sd, &err) || exp_truth_build(d->mesh[0] ? d->mesh : NULL, e.topo_res, sd, &d->truth, &err)) {
+      free(sd);
+      fprintf(stderr, "morsegs experiment: %s: ground truth: %s\n", d->name, err.msg);
+      goto fail;
+    }
+    free(sd);
+    if (d->mesh[0])
+      printf("%s: GT mesh %s: Betti (%d, %d, %d), persisting over %.4g: (%d, %d, %d)\n", d->name, d->mesh, d->truth.betti[0],
+             d->truth.betti[1], d->truth.betti[2], d->truth.pers_threshold, d->truth.betti_persistent[0],
+             d->truth.betti_persistent[1], d->truth.betti_persistent[2]);
+    else
+      printf("%s: no GT mesh: geometry and topology measures are skipped\n", d->name);
+  }
+  /* the plan: main runs seed by seed (so early results cover every variant), then sweeps */
+  size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)e.n_sweep * (size_t)e.sweep_seeds) + 1;
+  plan_item *plan = calloc(cap, sizeof *plan);
+  size_t np = 0;
+  for (size_t d = 0; d < e.n_ds; d++) {
+    for (int s = 0; s < e.seeds; s++)
+      for (size_t v = 0; v < e.n_vars; v++) {
+        plan_item *p = &plan[np++];
+        p->ds = d; p->var = v; p->seed = s; p->factor = 1.0;
+        snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, s);
+      }
+    for (size_t v = 0; v < e.n_vars; v++) {
+      if (!e.vars[v].sweep) continue;
+      for (int k = 0; k < e.n_sweep; k++)
+        for (int s = 0; s < e.sweep_seeds; s++) {
+          plan_item *p = &plan[np++];
+          p->ds = d; p->var = v; p->seed = s; p->factor = e.sweep[k]; p->sweep = 1;
+          snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/sweep_x%g_seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, e.sweep[k], s);
+        }
+    }
+  }
+  e.planned = np;
+  struct sigaction sa, old_int, old_term;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &old_int);
+  sigaction(SIGTERM, &sa, &old_term);
+  /* finished runs first (their count sets the ETA's denominator) */
+  unsigned char *done = calloc(np + 1, 1);
+  size_t kept = 0;
+  for (size_t i = 0; i < np; i++) {
+    char *rp = mgs_path_join(plan[i].dir, "result.json");
+    exp_run r;
+    if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
+      exp_run *dst = push_run(&e);
+      if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
+    } else if (mgs_path_exists(rp)) {
+      fprintf(stderr, "morsegs experiment: note: %s: %s; the run is redone\n", rp, err.msg);
+    }
+    free(rp);
+  }
+  printf("experiment %s: %zu runs planned (%zu datasets x %zu variants x %d seeds + %zu sweep runs), %zu finished before, "
+         "%d iterations each, evaluated at", e.dir, np, e.n_ds, e.n_vars, e.seeds, np - e.n_ds * e.n_vars * (size_t)e.seeds,
+         kept, e.iters);
+  for (int k = 0; k < e.n_evals; k++) printf(" %d", e.evals[k]);
+  printf("\n");
+  if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
+  double spent = 0;
+  size_t ran = 0, idx = 0, todo = np - kept;
+  int interrupted = 0;
+  for (size_t i = 0; i < np && !interrupted; i++) {
+    if (done[i]) continue;
+    plan_item *it = &plan[i];
+    variant_sel *vs = &e.vars[it->var];
+    idx++;
+    char label[512];
+    if (it->sweep) snprintf(label, sizeof label, "%s / %s / %s x%g (seed %d)", e.ds[it->ds].name, vs->def->name, vs->knob, it->factor, it->seed);
+    else snprintf(label, sizeof label, "%s / %s / seed %d", e.ds[it->ds].name, vs->def->name, it->seed);
+    if (!strcmp(vs->status.status, "not available") || (it->sweep && vs->sweep_unavailable)) {
+      printf("[%zu/%zu] %s: skipped (not available)\n", idx, todo, label);
+      continue;
+    }
+    char eta[32];
+    fmt_duration(ran ? spent / (double)ran * (double)(todo - idx + 1) : NAN, eta, sizeof eta);
+    printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
+           todo - idx + 1, eta);
+    fflush(stdout);
+    const double t0 = mgs_now();
+    exp_run *r = push_run(&e);
+    if (!r) { fprintf(stderr, "morsegs experiment: out of memory\n"); goto fail_plan; }
+    char reason[1024];
+    int res = do_run(&e, it, r, reason, sizeof reason);
+    const double dt = mgs_now() - t0;
+    if (res != 0) e.n_runs--;
+    if (res == 0) {
+      spent += dt; ran++;
+      snprintf(vs->status.status, sizeof vs->status.status, "available");
+      const exp_point *p = &r->pt[r->n_points - 1];
+      printf("[%zu/%zu] %s: done in %.1f s (train %.1f s): PSNR %.3f dB, %.0f Gaussians, Chamfer %.6g\n", idx, todo, label,
+             dt, r->train_seconds, p->psnr, p->gaussians, p->chamfer);
+    } else if (res == 2) {
+      mgs_error e2;
+      mgs_remove_tree(it->dir, &e2);
+      char *parent = mgs_path_dirname(it->dir);
+      if (parent) rmdir(parent); /* the variant's folder, when this was its only run */
+      free(parent);
+      if (it->sweep && it->factor != 1.0 && strcmp(vs->status.status, "not available")) {
+        vs->sweep_unavailable = 1;
+        snprintf(vs->sweep_reason, sizeof vs->sweep_reason, "%s", reason);
+        printf("[%zu/%zu] %s: the knob %s is not available: %s\n", idx, todo, label, vs->knob, reason);
+      } else {
+        snprintf(vs->status.status, sizeof vs->status.status, "not available");
+        snprintf(vs->status.reason, sizeof vs->status.reason, "%s", reason);
+        printf("[%zu/%zu] %s: variant not available: %s\n", idx, todo, label, reason);
+      }
+    } else if (res == 3) {
+      interrupted = 1;
+    } else {
+      e.failures++;
+      if (strcmp(vs->status.status, "available")) {
+        snprintf(vs->status.status, sizeof vs->status.status, "failed");
+        snprintf(vs->status.reason, sizeof vs->status.reason, "%s", reason);
+      }
+      printf("[%zu/%zu] %s: FAILED: %s\n", idx, todo, label, reason);
+    }
+    fflush(stdout);
+    if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
+  }
+  sigaction(SIGINT, &old_int, NULL);
+  sigaction(SIGTERM, &old_term, NULL);
+  if (interrupted) {
+    fprintf(stderr, "morsegs experiment: interrupted; finished runs are kept, run the same command again to continue\n");
+    rc = 130;
+  } else {
+    printf("wrote %s/RESULTS.md, %s/RESULTS.json, %s/curves.csv, %s/h3.csv, %s/plots/\n", e.dir, e.dir, e.dir, e.dir, e.dir);
+    if (e.failures) fprintf(stderr, "morsegs experiment: %d run(s) failed (see RESULTS.md); run again to retry them\n", e.failures);
+    rc = e.failures ? 1 : 0;
+  }
+fail_plan:
+  free(done);
+  free(plan);
+fail:
+  for (size_t i = 0; i < e.n_ds; i++) exp_truth_free(&e.ds[i].truth);
+  free(e.ds);
+  free(e.vars);
+  free(e.runs);
+  free(e.command_line);
+  sl_free(&e.train_args);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom);
+  if (lock_fd >= 0) close(lock_fd);
+  return rc;
+usage_fail:
+  rc = 2;
+  goto fail;
+}

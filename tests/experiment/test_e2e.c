@@ -1,0 +1,196 @@
+/* morsegs experiment end to end on a tiny built-in scene (sphere, 8 views of 48x48, 700
+ * iterations, 2 seeds, one knob-sweep run, a variant train rejects): killed (SIGKILL) after
+ * its first finished run and started again, it keeps that run untouched, leaves no training
+ * process behind, and finishes with RESULTS.md, RESULTS.json, the CSVs, the plots and one
+ * folder per run; the figures RESULTS.md shows for a run equal what `morsegs eval` reports
+ * for it. */
+#include <dirent.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+#include <cjson/cJSON.h>
+#include "mgs_test.h"
+#include "core/mgs_fs.h"
+
+static const char *cli;
+
+static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static int sh(const char *fmt, ...) {
+  char cmd[8192];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(cmd, sizeof cmd, fmt, ap);
+  va_end(ap);
+  fprintf(stderr, "$ %s\n", cmd);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
+}
+
+static double mtime(const char *p) {
+  struct stat sb;
+  if (stat(p, &sb)) return -1;
+  return (double)sb.st_mtim.tv_sec + 1e-9 * (double)sb.st_mtim.tv_nsec;
+}
+
+/* Processes whose command line mentions `needle` (other than this test). */
+static int processes_with(const char *needle) {
+  DIR *d = opendir("/proc");
+  int n = 0;
+  struct dirent *e;
+  while (d && (e = readdir(d))) {
+    if (e->d_name[0] < '0' || e->d_name[0] > '9' || atoi(e->d_name) == getpid()) continue;
+    char p[300], buf[8192];
+    snprintf(p, sizeof p, "/proc/%s/cmdline", e->d_name);
+    FILE *f = fopen(p, "rb");
+    if (!f) continue;
+    size_t len = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    for (size_t i = 0; i < len; i++) if (!buf[i]) buf[i] = ' ';
+    buf[len] = 0;
+    if (strstr(buf, needle) && strstr(buf, "morsegs")) n++;
+  }
+  if (d) closedir(d);
+  return n;
+}
+
+/* The cells of the RESULTS.md runs-table row that starts with `prefix`. */
+static int row_cells(const char *md, const char *prefix, char cells[20][64]) {
+  const char *l = strstr(md, prefix);
+  if (!l) return 0;
+  int n = 0;
+  const char *q = l + 1;
+  while (*q && *q != '\n' && n < 20) {
+    const char *bar = strchr(q, '|');
+    if (!bar) break;
+    const char *a = q, *b = bar;
+    while (a < b && *a == ' ') a++;
+    while (b > a && b[-1] == ' ') b--;
+    snprintf(cells[n], 64, "%.*s", (int)(b - a), a);
+    n++;
+    q = bar + 1;
+  }
+  return n;
+}
+
+int main(void) {
+  cli = getenv("MGS_CLI");
+  if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 2; }
+  setenv("MGS_THREADS", "2", 0);
+  const char *tmp = mgs_test_tmpdir("exp_e2e");
+  char ds[512], out[512], log1[512], log2[512];
+  snprintf(ds, sizeof ds, "%s/ds", tmp);
+  snprintf(out, sizeof out, "%s/exp", tmp);
+  snprintf(log1, sizeof log1, "%s/first.log", tmp);
+  snprintf(log2, sizeof log2, "%s/second.log", tmp);
+  CHECK(sh("'%s' scene --builtin sphere -o '%s' --views 8 --test-views 2 --width 48 --height 48 --spp 1 --init-points 1500 -q",
+           cli, ds) == 0);
+  char *const args[] = {(char *)"morsegs", (char *)"experiment", ds, (char *)"-o", out, (char *)"--iters", (char *)"700",
+                        (char *)"--seeds", (char *)"2", (char *)"--evals", (char *)"2", (char *)"--sweep", (char *)"2",
+                        (char *)"--topo-res", (char *)"96", (char *)"--variants", (char *)"baseline,bogus",
+                        (char *)"--variant", (char *)"bogus=--no-such-flag 1", NULL};
+  /* first invocation, killed once its first run is finished */
+  pid_t pid = fork();
+  if (pid == 0) {
+    FILE *f = freopen(log1, "w", stdout);
+    (void)f;
+    execv(cli, args);
+    _exit(127);
+  }
+  char first[700], first_ply[700];
+  snprintf(first, sizeof first, "%s/runs/ds/baseline/seed_0/result.json", out);
+  snprintf(first_ply, sizeof first_ply, "%s/runs/ds/baseline/seed_0/point_cloud/iteration_700/point_cloud.ply", out);
+  int waited = 0, status = 0, exited = 0;
+  while (!mgs_path_exists(first) && waited < 3000) {
+    if (waitpid(pid, &status, WNOHANG) == pid) { exited = 1; break; }
+    usleep(100000);
+    waited++;
+  }
+  CHECK_MSG(!exited, "the experiment ended before it could be killed (status %d)", status);
+  CHECK(mgs_path_exists(first));
+  if (!exited) { kill(pid, SIGKILL); waitpid(pid, &status, 0); }
+  char second_run[700];
+  snprintf(second_run, sizeof second_run, "%s/runs/ds/baseline/seed_1/result.json", out);
+  CHECK_MSG(!mgs_path_exists(second_run), "killed too late: the second run had finished");
+  usleep(500000);
+  CHECK_MSG(processes_with(out) == 0, "a child of the killed experiment is still running");
+  char *before = NULL;
+  size_t n;
+  mgs_read_file(first, &before, &n, NULL);
+  const double t_result = mtime(first), t_ply = mtime(first_ply);
+  /* second invocation: finishes without redoing the finished run */
+  char cmd[4096] = "";
+  for (int i = 1; args[i]; i++) {
+    size_t l = strlen(cmd);
+    snprintf(cmd + l, sizeof cmd - l, " '%s'", args[i]);
+  }
+  CHECK(sh("'%s'%s > '%s'", cli, cmd, log2) == 0);
+  char *after = NULL, *l2 = NULL;
+  mgs_read_file(first, &after, &n, NULL);
+  CHECK(before && after && !strcmp(before, after));
+  CHECK(mtime(first) == t_result && mtime(first_ply) == t_ply);
+  mgs_read_file(log2, &l2, &n, NULL);
+  CHECK_MSG(l2 && strstr(l2, "1 finished before"), "second log: %s", l2 ? l2 : "(none)");
+  CHECK(l2 && strstr(l2, "bogus") && strstr(l2, "not available"));
+  /* outputs: one folder per run, the report, the curves */
+  static const char *files[] = {"RESULTS.md", "RESULTS.json", "curves.csv", "h3.csv", "experiment.json",
+                                "plots/ds_psnr_time.png", "plots/ds_psnr_time.svg", "plots/ds_chamfer_time.png",
+                                "plots/ds_chamfer_time.svg", "plots/ds_h3_count_psnr.png", "datasets/ds/gt_diagram.json",
+                                "runs/ds/baseline/seed_0/result.json", "runs/ds/baseline/seed_1/result.json",
+                                "runs/ds/baseline/sweep_x2_seed_0/result.json"};
+  char path[1024];
+  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+    snprintf(path, sizeof path, "%s/%s", out, files[i]);
+    CHECK_MSG(mgs_path_exists(path), "%s missing", path);
+  }
+  /* no temporary file of an interrupted atomic write is left behind */
+  for (int k = 0; k < 2; k++) {
+    snprintf(path, sizeof path, "%s%s", out, k ? "/plots" : "");
+    DIR *d = opendir(path);
+    struct dirent *e;
+    while (d && (e = readdir(d))) CHECK_MSG(!strstr(e->d_name, ".tmp-"), "stale temporary %s/%s", path, e->d_name);
+    if (d) closedir(d);
+  }
+  snprintf(path, sizeof path, "%s/runs/ds/bogus", out);
+  CHECK_MSG(!mgs_path_exists(path), "an unavailable variant left a run folder");
+  char *md = NULL, *csv = NULL, *js = NULL;
+  snprintf(path, sizeof path, "%s/RESULTS.md", out);
+  mgs_read_file(path, &md, &n, NULL);
+  CHECK(md && strstr(md, "| bogus | not available |") && strstr(md, "no-such-flag"));
+  snprintf(path, sizeof path, "%s/curves.csv", out);
+  mgs_read_file(path, &csv, &n, NULL);
+  int lines = 0;
+  for (char *q = csv; q && *q; q++) lines += *q == '\n';
+  CHECK_MSG(lines == 1 + 2 + 2 + 1, "curves.csv has %d lines", lines); /* 2 points per main run, final only for the sweep */
+  snprintf(path, sizeof path, "%s/RESULTS.json", out);
+  mgs_read_file(path, &js, &n, NULL);
+  cJSON *root = cJSON_Parse(js);
+  CHECK(root && cJSON_GetObjectItem(root, "runs_finished")->valueint == 3);
+  /* figures of one run equal what `morsegs eval` reports for it */
+  char run[700];
+  snprintf(run, sizeof run, "%s/runs/ds/baseline/seed_1", out);
+  CHECK(sh("'%s' eval '%s' --no-images > /dev/null", cli, run) == 0);
+  char *ev = NULL;
+  snprintf(path, sizeof path, "%s/results.json", run);
+  mgs_read_file(path, &ev, &n, NULL);
+  cJSON *ej = cJSON_GetObjectItem(cJSON_Parse(ev), "ours_700");
+  CHECK(ej != NULL);
+  cJSON *geo = cJSON_GetObjectItem(ej, "geometry");
+  char want[6][64];
+  snprintf(want[0], 64, "%.3f", cJSON_GetObjectItem(ej, "PSNR")->valuedouble);
+  snprintf(want[1], 64, "%.4f", cJSON_GetObjectItem(ej, "SSIM")->valuedouble);
+  snprintf(want[2], 64, "%.0f", cJSON_GetObjectItem(ej, "gaussians")->valuedouble);
+  snprintf(want[3], 64, "%.6g", cJSON_GetObjectItem(geo, "chamfer")->valuedouble);
+  snprintf(want[4], 64, "%.4f", cJSON_GetObjectItem(geo, "fscore")->valuedouble);
+  snprintf(want[5], 64, "%.0f", cJSON_GetObjectItem(geo, "floaters")->valuedouble);
+  char cells[20][64];
+  int nc = row_cells(md, "| ds | baseline | 1 | 700 |", cells);
+  CHECK_MSG(nc >= 10, "no RESULTS.md row for baseline seed 1 (%d cells)", nc);
+  static const char *what[6] = {"PSNR", "SSIM", "Gaussians", "Chamfer", "F-score", "floaters"};
+  for (int k = 0; k < 6 && nc >= 10; k++)
+    CHECK_MSG(!strcmp(cells[4 + k], want[k]), "%s: RESULTS.md %s, morsegs eval %s", what[k], cells[4 + k], want[k]);
+  free(before); free(after); free(l2); free(md); free(csv); free(js); free(ev);
+  return mgs_test_finish();
+}

@@ -57,7 +57,7 @@ static void test_city_cameras(void) {
       }
     }
     CHECK(inside);
-    CHECK_MSG(worst < 5.0, "size %d: a view reaches %.2f units", size, worst);
+    CHECK_MSG(worst < 3.0, "size %d: a view reaches %.2f units", size, worst);
   }
 }
 

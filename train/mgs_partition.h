@@ -1,0 +1,36 @@
+/* Spatial partition of a scene into blocks for distributed training (train/partition.c):
+ * tiles (cubes of a fixed side, as the visibility's) ordered along a Morton space-filling
+ * curve, cut into `ranks` contiguous runs of about equal cost (the Gaussians in them), so
+ * each block is compact in space. A point belongs to the block whose run holds its tile's
+ * curve position (every point of space has exactly one owner, also points born later
+ * outside the initial tiles). Pure computation: the same input gives the same partition
+ * on every rank, so none is sent. */
+#ifndef MGS_PARTITION_H
+#define MGS_PARTITION_H
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mgs_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_partition {
+  int ranks;
+  double tile;            /* tile side, world units */
+  uint64_t *split;        /* ranks + 1 curve positions: rank r owns [split[r], split[r+1]) */
+  double (*lo)[3], (*hi)[3]; /* per rank: box of its tiles that held points (empty: lo > hi) */
+  size_t *count;          /* per rank: points owned at build time */
+} mgs_partition;
+
+/* tile <= 0: chosen as the visibility's automatic side (~256 points a tile). Errors:
+ * ranks < 1, no finite point. */
+mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double tile, mgs_partition **out, mgs_error *err);
+void mgs_partition_destroy(mgs_partition *p);
+/* The owner of a point (non-finite coordinates: rank 0). */
+int mgs_partition_owner(const mgs_partition *p, const float xyz[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -30,6 +30,11 @@ void mgs_partition_destroy(mgs_partition *p);
 /* The owner of a point (non-finite coordinates: rank 0). */
 int mgs_partition_owner(const mgs_partition *p, const float xyz[3]);
 
+/* perm[j] = the point that comes j-th along the Morton curve of tiles of side `tile`
+ * (ties by index; non-finite points first). Used to lay Gaussians out in memory in
+ * spatial order, so the few a view sees share cache lines and pages. */
+mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, uint32_t *perm, mgs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

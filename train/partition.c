@@ -122,3 +122,24 @@ int mgs_partition_owner(const mgs_partition *p, const float xyz[3]) {
   }
   return lo;
 }
+
+typedef struct { uint64_t key; uint32_t idx; } keyed;
+
+static int cmp_keyed(const void *a, const void *b) {
+  const keyed *x = a, *y = b;
+  if (x->key != y->key) return x->key < y->key ? -1 : 1;
+  return x->idx < y->idx ? -1 : (x->idx > y->idx);
+}
+
+mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, uint32_t *perm, mgs_error *err) {
+  if (n > UINT32_MAX) return mgs_error_set(err, MGS_ERR_ARG, "partition: %zu points exceed the 2^32 limit", n);
+  if (!(tile > 0) || !isfinite(tile)) return mgs_error_set(err, MGS_ERR_ARG, "partition: tile side %g", tile);
+  keyed *k = malloc((n ? n : 1) * sizeof *k);
+  if (!k) return mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu points", n);
+  double inv = 1.0 / tile;
+  for (size_t i = 0; i < n; i++) { k[i].key = curve_pos(xyz + 3 * i, inv); k[i].idx = (uint32_t)i; }
+  qsort(k, n, sizeof *k, cmp_keyed);
+  for (size_t i = 0; i < n; i++) perm[i] = k[i].idx;
+  free(k);
+  return MGS_OK;
+}

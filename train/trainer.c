@@ -26,6 +26,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->checkpoint_every = 0;
   o->progress = 0;
   o->vis_rebin_every = 200;
+  o->spatial_order = -1;
   o->prefetch = 8;
   mgs_adc_options_default(&o->adc);
 }

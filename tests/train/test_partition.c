@@ -52,6 +52,24 @@ static void test_partition(void) {
     mgs_partition_destroy(p);
     mgs_partition_destroy(q);
   }
+  /* the Morton order: a permutation along which consecutive points are near each other
+     (mean step far below the mean step of the input's random order) */
+  uint32_t *perm = malloc(n * sizeof *perm);
+  uint8_t *seen = calloc(n, 1);
+  CHECK_OK(mgs_partition_morton_order(xyz, n, 0.5, perm, &err), &err);
+  int is_perm = 1;
+  for (size_t j = 0; j < n; j++) { is_perm &= perm[j] < n && !seen[perm[j]]; if (perm[j] < n) seen[perm[j]] = 1; }
+  CHECK(is_perm);
+  double step_sorted = 0, step_input = 0;
+  for (size_t j = 1; j < n; j++)
+    for (int k = 0; k < 3; k++) {
+      step_sorted += fabs(xyz[3 * perm[j] + k] - xyz[3 * perm[j - 1] + k]);
+      step_input += fabs(xyz[3 * j + k] - xyz[3 * (j - 1) + k]);
+    }
+  CHECK_MSG(step_sorted < 0.2 * step_input, "Morton order steps %.1f vs input %.1f", step_sorted, step_input);
+  CHECK(mgs_partition_morton_order(xyz, n, 0, perm, &err) == MGS_ERR_ARG);
+  free(perm);
+  free(seen);
   mgs_partition *p = NULL;
   CHECK(mgs_partition_build(xyz, n, 0, 0, &p, &err) == MGS_ERR_ARG && !p);
   float bad[3] = {NAN, NAN, NAN};

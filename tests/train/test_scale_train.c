@@ -160,6 +160,7 @@ static void test_trainer_visibility_identical(void) {
   o.visibility = 1;
   o.vis_tile = 0.5;
   o.vis_rebin_every = 7;
+  o.spatial_order = 0; /* the same Gaussian order as the reference run */
   mgs_trainer *b = make_trainer(ds, &o);
   mgs_error err;
   CHECK_OK(mgs_trainer_run(a, &err), &err);

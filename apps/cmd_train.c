@@ -47,6 +47,7 @@ static void usage(FILE *f) {
     "                          reference, which steps all; default: sparse when visibility is auto-on)\n"
     "      --image-cache-mb N  stream train images through an 8-bit cache of N MiB with a prefetch\n"
     "                          thread (0 = all images in memory as floats, the default)\n"
+    "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "      --quiet             no progress bar\n"
     "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
     "  --normal-loss, --init levelset|lpvi.\n");

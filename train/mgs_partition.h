@@ -35,6 +35,15 @@ int mgs_partition_owner(const mgs_partition *p, const float xyz[3]);
  * spatial order, so the few a view sees share cache lines and pages. */
 mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, uint32_t *perm, mgs_error *err);
 
+/* Views ordered for locality: chunk_of[v] = the chunk of `chunk` consecutive views along
+ * the Morton curve of their camera centres (n x 3 floats). */
+mgs_status mgs_partition_view_chunks(const float *centers, size_t n, double tile, size_t chunk, uint32_t *chunk_of,
+                                     mgs_error *err);
+/* Reorders perm (a permutation of 0..n-1) so each chunk's views are consecutive: chunks
+ * in the order their first view appears in perm, views within a chunk in perm's order
+ * (a random perm stays random at both levels). scratch: 2n entries. */
+void mgs_partition_order_by_chunks(const uint32_t *chunk_of, size_t n, uint32_t *perm, uint32_t *scratch);
+
 #ifdef __cplusplus
 }
 #endif

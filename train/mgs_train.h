@@ -148,6 +148,9 @@ typedef struct mgs_train_options {
                                 MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
                                 images loaded as floats up front */
   int prefetch;              /* views decoded ahead by the cache's thread (8; 0 = no thread) */
+  int view_locality;         /* 1: each epoch visits spatial chunks of views (camera centres
+                                along a Morton curve, max(8, prefetch) a chunk) one after
+                                another, chunks and views within them in random order */
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 

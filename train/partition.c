@@ -143,3 +143,38 @@ mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, u
   free(k);
   return MGS_OK;
 }
+
+mgs_status mgs_partition_view_chunks(const float *centers, size_t n, double tile, size_t chunk, uint32_t *chunk_of,
+                                     mgs_error *err) {
+  if (chunk < 1) return mgs_error_set(err, MGS_ERR_ARG, "partition: view chunk of %zu", chunk);
+  uint32_t *perm = malloc((n ? n : 1) * sizeof *perm);
+  if (!perm) return mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu views", n);
+  mgs_status st = mgs_partition_morton_order(centers, n, tile, perm, err);
+  if (st == MGS_OK)
+    for (size_t j = 0; j < n; j++) chunk_of[perm[j]] = (uint32_t)(j / chunk);
+  free(perm);
+  return st;
+}
+
+void mgs_partition_order_by_chunks(const uint32_t *chunk_of, size_t n, uint32_t *perm, uint32_t *scratch) {
+  /* chunks in the order of their first view in perm; views of a chunk in perm's order */
+  size_t n_chunks = 0;
+  for (size_t j = 0; j < n; j++) if (chunk_of[j] + 1 > n_chunks) n_chunks = chunk_of[j] + 1;
+  /* scratch: n_chunks rank slots then n output slots (2n is enough: n_chunks <= n) */
+  uint32_t *rank = scratch, *out = scratch + n;
+  for (size_t c = 0; c < n_chunks; c++) rank[c] = UINT32_MAX;
+  uint32_t next = 0;
+  for (size_t j = 0; j < n; j++) {
+    uint32_t c = chunk_of[perm[j]];
+    if (rank[c] == UINT32_MAX) rank[c] = next++;
+  }
+  /* counting sort by chunk rank, stable */
+  uint32_t *start = malloc((n_chunks + 1) * sizeof *start);
+  if (!start) return; /* keep perm as it is: an order hint only */
+  memset(start, 0, (n_chunks + 1) * sizeof *start);
+  for (size_t j = 0; j < n; j++) start[rank[chunk_of[perm[j]]] + 1]++;
+  for (size_t c = 0; c < n_chunks; c++) start[c + 1] += start[c];
+  for (size_t j = 0; j < n; j++) out[start[rank[chunk_of[perm[j]]]]++] = perm[j];
+  memcpy(perm, out, n * sizeof *perm);
+  free(start);
+}

@@ -46,6 +46,7 @@ static void shuffle(mgs_trainer *t) {
     uint32_t x = t->perm[i - 1]; t->perm[i - 1] = t->perm[j]; t->perm[j] = x;
   }
   t->perm_pos = 0;
+  mgs_trainer_scale_order_views(t); /* --view-order locality (train/trainer_scale.c) */
 }
 
 mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,

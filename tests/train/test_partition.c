@@ -3,6 +3,7 @@
  * owner of a point outside the initial tiles is still defined. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 #include "mgs_test.h"
 #include "core/mgs_rng.h"
 #include "train/mgs_partition.h"
@@ -77,7 +78,45 @@ static void test_partition(void) {
   free(xyz);
 }
 
+/* Views ordered by chunks: a permutation, each chunk consecutive, chunks in the order of
+ * their first appearance and views within a chunk in the input order. */
+static void test_view_chunks(void) {
+  const size_t n = 50;
+  float c[150];
+  mgs_rng r;
+  mgs_rng_init(&r, 3, 3);
+  for (size_t i = 0; i < 3 * n; i++) c[i] = (float)(10.0 * mgs_rng_uniform(&r));
+  uint32_t chunk_of[50], perm[50], in[50], scratch[100];
+  mgs_error err;
+  CHECK_OK(mgs_partition_view_chunks(c, n, 1.0, 8, chunk_of, &err), &err);
+  size_t per[8] = {0};
+  for (size_t i = 0; i < n; i++) { CHECK(chunk_of[i] < 7); if (chunk_of[i] < 8) per[chunk_of[i]]++; }
+  for (int k = 0; k < 6; k++) CHECK(per[k] == 8);
+  CHECK(per[6] == 2);
+  for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
+  for (size_t i = n; i > 1; i--) { uint32_t j = mgs_rng_below(&r, (uint32_t)i), x = perm[i - 1]; perm[i - 1] = perm[j]; perm[j] = x; }
+  memcpy(in, perm, sizeof in);
+  mgs_partition_order_by_chunks(chunk_of, n, perm, scratch);
+  int runs = 1, is_perm = 1, kept_order = 1;
+  uint8_t seen[50] = {0};
+  for (size_t j = 0; j < n; j++) { is_perm &= !seen[perm[j]]; seen[perm[j]] = 1; }
+  for (size_t j = 1; j < n; j++) runs += chunk_of[perm[j]] != chunk_of[perm[j - 1]];
+  CHECK(is_perm);
+  CHECK_MSG(runs == 7, "%d runs of chunks", runs);
+  CHECK(chunk_of[perm[0]] == chunk_of[in[0]]); /* the first view's chunk comes first */
+  for (size_t a = 0; a < n; a++)
+    for (size_t b = a + 1; b < n; b++)
+      if (chunk_of[perm[a]] == chunk_of[perm[b]]) {
+        size_t pa = 0, pb = 0;
+        for (size_t k = 0; k < n; k++) { if (in[k] == perm[a]) pa = k; if (in[k] == perm[b]) pb = k; }
+        kept_order &= pa < pb;
+      }
+  CHECK(kept_order);
+  CHECK(mgs_partition_view_chunks(c, n, 1.0, 0, chunk_of, &err) == MGS_ERR_ARG);
+}
+
 int main(void) {
   RUN(test_partition);
+  RUN(test_view_chunks);
   return mgs_test_finish();
 }

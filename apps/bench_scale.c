@@ -30,7 +30,7 @@ static const char *conf_name[N_CONF] = {"reference", "scale"};
 typedef struct result {
   int size, conf, ok;
   size_t gaussians, views;
-  double s_per_iter, peak_mb, listed, hit_rate, setup_s, loss;
+  double s_per_iter, peak_mb, listed, hit_rate, setup_s, loss, fwd_ms, bwd_ms;
 } result;
 
 /* ---- child: one training run, one line of results on stdout ---- */
@@ -61,19 +61,24 @@ static int child(const char *data, int conf, int iters, int warmup, int cache_mb
   if (!st) st = mgs_trainer_create(ds, &o, g0, mgs_strategy_adc_create(&o.adc), &t, &err);
   if (st) { mgs_dataset_destroy(ds); return mgs_cli_fail("bench scale", &err); }
   double setup = mgs_now() - t0;
+  double ph0[MGS_TRAIN_PHASES], ph1[MGS_TRAIN_PHASES];
   if (!st) st = mgs_trainer_run_until(t, warmup, &err);
+  mgs_trainer_phase_seconds(t, ph0);
   double t1 = mgs_now();
   if (!st) st = mgs_trainer_run_until(t, iters, &err);
   double t2 = mgs_now();
+  mgs_trainer_phase_seconds(t, ph1);
+  double per = 1e3 / (double)(iters - warmup);
   if (st) { mgs_trainer_destroy(t); mgs_dataset_destroy(ds); return mgs_cli_fail("bench scale", &err); }
   double listed = 0;
   mgs_trainer_visibility_stats(t, &listed, NULL, NULL);
   size_t hits = 0, misses = 0;
   mgs_trainer_image_cache_stats(t, &hits, &misses, NULL);
-  printf("RESULT %d %d %zu %zu %.6f %.3f %.1f %.4f %.3f %.6f\n", size, conf, mgs_trainer_model(t)->n,
+  printf("RESULT %d %d %zu %zu %.6f %.3f %.1f %.4f %.3f %.6f %.3f %.3f\n", size, conf, mgs_trainer_model(t)->n,
          ds->n_views[MGS_SPLIT_TRAIN], (t2 - t1) / (double)(iters - warmup), (double)mgs_peak_rss() / 1048576.0,
          conf == CONF_SCALE ? listed : (double)mgs_trainer_model(t)->n,
-         hits + misses ? (double)hits / (double)(hits + misses) : -1.0, setup, mgs_trainer_last_loss(t));
+         hits + misses ? (double)hits / (double)(hits + misses) : -1.0, setup, mgs_trainer_last_loss(t),
+         (ph1[0] - ph0[0]) * per, (ph1[2] + ph1[4] - ph0[2] - ph0[4]) * per);
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
   return 0;
@@ -89,8 +94,8 @@ static int run_child(const char *self, const char *data, int conf, int iters, in
   char line[512];
   int ok = 0;
   while (fgets(line, sizeof line, p))
-    if (sscanf(line, "RESULT %d %d %zu %zu %lf %lf %lf %lf %lf %lf", &r->size, &r->conf, &r->gaussians, &r->views,
-               &r->s_per_iter, &r->peak_mb, &r->listed, &r->hit_rate, &r->setup_s, &r->loss) == 10)
+    if (sscanf(line, "RESULT %d %d %zu %zu %lf %lf %lf %lf %lf %lf %lf %lf", &r->size, &r->conf, &r->gaussians, &r->views,
+               &r->s_per_iter, &r->peak_mb, &r->listed, &r->hit_rate, &r->setup_s, &r->loss, &r->fwd_ms, &r->bwd_ms) == 12)
       ok = 1;
   int rc = pclose(p);
   r->ok = ok && rc == 0;
@@ -265,8 +270,9 @@ int mgs_bench_scale(int argc, char **argv) {
       if (!run_child(self, dirs[s], k, iters, warmup, cache_mb, sizes[s], r))
         fprintf(stderr, "morsegs bench scale: the %s run at N = %d failed\n", conf_name[k], sizes[s]);
       else
-        printf("N=%d %-9s %7zu Gaussians %4zu views: %.4f s/iter, peak RSS %.0f MiB, %.0f projected/iter, hit rate %s%.2f\n",
-               sizes[s], conf_name[k], r->gaussians, r->views, r->s_per_iter, r->peak_mb, r->listed,
+        printf("N=%d %-9s %7zu Gaussians %4zu views: %.4f s/iter (fwd %.1f ms, bwd+Adam %.1f ms), peak RSS %.0f MiB, "
+               "%.0f projected/iter, hit rate %s%.2f\n",
+               sizes[s], conf_name[k], r->gaussians, r->views, r->s_per_iter, r->fwd_ms, r->bwd_ms, r->peak_mb, r->listed,
                r->hit_rate < 0 ? "-" : "", r->hit_rate < 0 ? 0.0 : r->hit_rate);
       fflush(stdout);
     }
@@ -309,8 +315,8 @@ int mgs_bench_scale(int argc, char **argv) {
   fprintf(f, "`morsegs bench scale --sizes %s --iters %d --warmup %d --res %d --cache-mb %d`, MGS_THREADS=%s; "
              "load average before: %s; after: %s.\n\n",
           sizes_arg, iters, warmup, res, cache_mb, getenv("MGS_THREADS") ? getenv("MGS_THREADS") : "(all)", load0, load1);
-  fprintf(f, "| N | content | config | Gaussians | views | s/iter | vs N=%d | peak RSS MiB | projected/iter | cache hits |\n"
-             "|---|---|---|---|---|---|---|---|---|---|\n", sizes[0]);
+  fprintf(f, "| N | content | config | Gaussians | views | s/iter | vs N=%d | forward ms | backward+Adam ms | peak RSS MiB | "
+             "projected/iter | cache hits |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n", sizes[0]);
   for (int k = 0; k < n_sizes * N_CONF; k++) {
     const result *r = &results[k];
     if (!r->ok) continue;
@@ -318,9 +324,9 @@ int mgs_bench_scale(int argc, char **argv) {
     char hr[32];
     if (r->hit_rate < 0) snprintf(hr, sizeof hr, "-");
     else snprintf(hr, sizeof hr, "%.0f%%", 100.0 * r->hit_rate);
-    fprintf(f, "| %d | %dx | %s | %zu | %zu | %.4f | %.2fx | %.0f | %.0f | %s |\n", r->size, r->size * r->size,
-            conf_name[r->conf], r->gaussians, r->views, r->s_per_iter, r0->ok ? r->s_per_iter / r0->s_per_iter : 0,
-            r->peak_mb, r->listed, hr);
+    fprintf(f, "| %d | %dx | %s | %zu | %zu | %.4f | %.2fx | %.1f | %.1f | %.0f | %.0f | %s |\n", r->size,
+            r->size * r->size, conf_name[r->conf], r->gaussians, r->views, r->s_per_iter,
+            r0->ok ? r->s_per_iter / r0->s_per_iter : 0, r->fwd_ms, r->bwd_ms, r->peak_mb, r->listed, hr);
   }
   fprintf(f, "\nBytes per Gaussian of the training state (allocated per Gaussian, SH degree 3): parameters %.0f, "
              "Adam moments %.0f, ADC state %.0f, gradient model + 2D-gradient norm %.0f, rasterizer buffers %.0f, "

@@ -53,6 +53,9 @@ static void usage(FILE *f) {
     "                          reference, which steps all; default: sparse when visibility is auto-on)\n"
     "      --image-cache-mb N  stream train images through an 8-bit cache of N MiB with a prefetch\n"
     "                          thread (0 = all images in memory as floats, the default)\n"
+    "      --view-order random|locality  locality: each epoch visits spatial chunks of views in turn\n"
+    "                          (random chunk order, random within a chunk; default random as the reference)\n"
+    "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "      --quiet             no progress bar\n"
     "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
     "  --normal-loss, --init levelset|lpvi.\n");
@@ -62,7 +65,7 @@ enum {
   O_ITERS = 1000, O_DOWNSCALE, O_SH, O_WHITE, O_BLACK, O_TEST_EVERY, O_SEED, O_STRATEGY, O_INIT,
   O_RANDOM_POINTS, O_DFROM, O_DUNTIL, O_DEVERY, O_RESET, O_GTHR, O_CKPT, O_SAVE_AT, O_RESUME, O_FORCE,
   O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_MAXW, O_LRSTEPS,
-  O_VIS, O_VIS_TILE, O_SPARSE, O_DENSE, O_CACHE, O_HELP
+  O_VIS, O_VIS_TILE, O_SPARSE, O_DENSE, O_CACHE, O_VIEW_ORDER, O_HELP
 };
 
 static int parse_int(const char *s, const char *name, int lo, int *out) {
@@ -169,7 +172,7 @@ int mgs_cmd_train(int argc, char **argv) {
     {"position-lr-max-steps", required_argument, 0, O_LRSTEPS}, {"help", no_argument, 0, O_HELP},
     {"visibility", required_argument, 0, O_VIS}, {"vis-tile", required_argument, 0, O_VIS_TILE},
     {"sparse-adam", no_argument, 0, O_SPARSE}, {"dense-adam", no_argument, 0, O_DENSE},
-    {"image-cache-mb", required_argument, 0, O_CACHE}, {0, 0, 0, 0}};
+    {"image-cache-mb", required_argument, 0, O_CACHE}, {"view-order", required_argument, 0, O_VIEW_ORDER}, {0, 0, 0, 0}};
   mgs_train_options o;
   mgs_train_options_default(&o);
   o.visibility = -1; /* auto */
@@ -235,6 +238,11 @@ int mgs_cmd_train(int argc, char **argv) {
         if (!*optarg || *end || !(o.vis_tile > 0) || !isfinite(o.vis_tile)) { fprintf(stderr, "morsegs train: --vis-tile needs a positive number (got '%s')\n", optarg); return 2; }
         break;
       }
+      case O_VIEW_ORDER:
+        if (!strcmp(optarg, "random")) o.view_locality = 0;
+        else if (!strcmp(optarg, "locality")) o.view_locality = 1;
+        else { fprintf(stderr, "morsegs train: --view-order must be random or locality (got '%s')\n", optarg); return 2; }
+        break;
       case O_SPARSE: o.sparse_adam = 1; break;
       case O_DENSE: o.sparse_adam = 0; break;
       case O_CACHE: {

@@ -202,7 +202,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl, const uint32_t 
   }
   /* lane setup: early culling, parameters (unused lanes benign) */
   for (int l = 0; l < 16; l++) {
-    size_t i = GI(l);
+    size_t i = l < nl ? GI(l) : 0; /* a listed block's idx has only nl entries */
     int ok = l < nl;
     double td[3] = {0, 0, 1};
     if (ok) {

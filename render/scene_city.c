@@ -1,7 +1,8 @@
 /* The camera rig of the city builtin (mgs_assets_city): cameras that each see a small part
  * of the city, the same amount at every city size. Half of the views are street-level
- * (eye 0.45 above the ground on a street, pitched 36 degrees down), half low aerial (eye
- * 2.0 up, pitched 62 degrees down); a random heading. Every ray of a view then points
+ * (eye 0.45 above the ground on a street, pitched 50 degrees down: the street ahead and
+ * the objects beside it), half low aerial (eye 1.4 up, pitched 70 degrees down); both
+ * face the middle of the city. Every ray of a view then points
  * down by more than the pitch minus half the vertical field of view and meets the ground
  * within a few units: no view sees the horizon, so the content (and the Gaussians) a view
  * covers does not grow with the city. Deterministic for (seed, split). */
@@ -34,13 +35,14 @@ void mgs_scene_city_cameras(const mgs_scene_options *o, int split, int n, mgs_ca
     } else {
       eye[0] = (mgs_rng_uniform(&rng) * 2.0 - 1.0) * (half - 0.5);
       eye[1] = (mgs_rng_uniform(&rng) * 2.0 - 1.0) * (half - 0.5);
-      eye[2] = 2.0;
+      eye[2] = 1.4;
       /* facing the middle of the city, within +-90 degrees */
       double c = atan2(-eye[1], -eye[0]);
       heading = (fabs(eye[0]) + fabs(eye[1]) > 0.25 ? c : heading) + (mgs_rng_uniform(&rng) - 0.5) * MGS_PI;
     }
-    /* the pitch keeps the top edge of the view at least 14 degrees below the horizon */
-    double pitch = (street ? 36.0 : 62.0) * MGS_PI / 180.0;
+    /* the pitch keeps the top edge of the view at least 14 degrees below the horizon
+       (wider fields of view than the default 39.6 degrees pitch further down) */
+    double pitch = (street ? 50.0 : 70.0) * MGS_PI / 180.0;
     if (pitch - 0.5 * fovy < 14.0 * MGS_PI / 180.0) pitch = 0.5 * fovy + 14.0 * MGS_PI / 180.0;
     if (pitch > 0.49 * MGS_PI) pitch = 0.49 * MGS_PI;
     double dir[3] = {cos(heading) * cos(pitch), sin(heading) * cos(pitch), -sin(pitch)};

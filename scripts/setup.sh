@@ -9,6 +9,7 @@ PKGS=(
   libassimp-dev libcjson-dev libcairo2-dev libqhull-dev
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
   libopencv-core-dev python3-pot python3-pil
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -142,12 +142,18 @@ typedef struct mgs_train_options {
                                 -1 auto: on when views see under half the initial model */
   double vis_tile;           /* tile side in world units, 0 = automatic */
   int vis_rebin_every;       /* re-bin the tiles every N iterations (200; 0 = only on count changes) */
+  int spatial_order;         /* with visibility: lay the initial Gaussians out along a Morton
+                                curve of tiles (memory locality; the model's order changes,
+                                not its content). -1 = yes (default), 0 = keep the input order */
   int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the
                                 reference); -1 auto: as the visibility's auto decision */
   size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
                                 MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
                                 images loaded as floats up front */
   int prefetch;              /* views decoded ahead by the cache's thread (8; 0 = no thread) */
+  int view_locality;         /* 1: each epoch visits spatial chunks of views (camera centres
+                                along a Morton curve, max(8, prefetch) a chunk) one after
+                                another, chunks and views within them in random order */
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 

@@ -27,6 +27,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->checkpoint_every = 0;
   o->progress = 0;
   o->vis_rebin_every = 200;
+  o->spatial_order = -1;
   o->prefetch = 8;
   mgs_adc_options_default(&o->adc);
 }
@@ -46,6 +47,7 @@ static void shuffle(mgs_trainer *t) {
     uint32_t x = t->perm[i - 1]; t->perm[i - 1] = t->perm[j]; t->perm[j] = x;
   }
   t->perm_pos = 0;
+  mgs_trainer_scale_order_views(t); /* --view-order locality (train/trainer_scale.c) */
 }
 
 mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,

@@ -42,6 +42,8 @@ struct mgs_trainer {
   struct mgs_image_cache *cache; /* NULL unless o.image_cache_mb */
   float *gt_buf;                /* the current view's image from the cache */
   size_t gt_cap;
+  uint32_t *view_chunk;         /* o.view_locality: chunk of each train view, and scratch */
+  uint32_t *view_scratch;
 };
 
 /* train/trainer_scale.c: the large-scene paths (visibility, sparse Adam) */
@@ -54,5 +56,8 @@ mgs_status mgs_trainer_scale_adam(mgs_trainer *t, const int *radii, unsigned mas
 /* The ground truth of train view i: the dataset's float image, or the cache's (then the
  * next views are handed to its prefetch thread). */
 mgs_status mgs_trainer_scale_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err);
+/* After each epoch's shuffle: views of one spatial chunk made consecutive (no-op unless
+ * o.view_locality). */
+void mgs_trainer_scale_order_views(mgs_trainer *t);
 void mgs_trainer_scale_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped);
 #endif

@@ -27,7 +27,9 @@ static void test_city_mesh(void) {
   CHECK_NEAR(lo[1], -2.0, 1e-6); CHECK_NEAR(hi[1], 2.0, 1e-6);
   CHECK_NEAR(lo[2], -0.1, 1e-6);
   CHECK(hi[2] > 0.3 && hi[2] < 1.0);
-  mgs_status s = mgs_assets_city(0, 1, &m1 /* left NULL on error */, &err);
+  mgs_mesh_destroy(m1);
+  m1 = (mgs_mesh *)&err; /* must come back NULL on error */
+  mgs_status s = mgs_assets_city(0, 1, &m1, &err);
   CHECK(s == MGS_ERR_ARG && m1 == NULL && strstr(err.msg, "--size"));
   mgs_mesh_destroy(m2);
 }
@@ -57,7 +59,7 @@ static void test_city_cameras(void) {
       }
     }
     CHECK(inside);
-    CHECK_MSG(worst < 5.0, "size %d: a view reaches %.2f units", size, worst);
+    CHECK_MSG(worst < 3.0, "size %d: a view reaches %.2f units", size, worst);
   }
 }
 

@@ -160,6 +160,7 @@ static void test_trainer_visibility_identical(void) {
   o.visibility = 1;
   o.vis_tile = 0.5;
   o.vis_rebin_every = 7;
+  o.spatial_order = 0; /* the same Gaussian order as the reference run */
   mgs_trainer *b = make_trainer(ds, &o);
   mgs_error err;
   CHECK_OK(mgs_trainer_run(a, &err), &err);
@@ -337,6 +338,7 @@ static void test_trainer_image_cache(void) {
   mgs_dataset *ds2 = written_dataset(dir, 6, 48, 40);
   o.image_cache_mb = 1;
   o.prefetch = 3;
+  o.view_locality = 1;
   mgs_trainer *b = make_trainer(ds2, &o);
   mgs_error err;
   CHECK_OK(mgs_trainer_run(a, &err), &err);

@@ -1,0 +1,303 @@
+/* `morsegs train --mpi DATA -o RUN [options]` under `mpirun -np K` (Open MPI): the scene's
+ * initial points are cut into K compact blocks along a Morton curve of tiles
+ * (train/mgs_partition.h); each rank trains its block plus ghost copies of the points
+ * within a margin of it, on the training views that see it, and rank 0 merges the
+ * Gaussians each rank owns (mean inside its block) into one model (MPI_Gatherv). One
+ * process (-np 1) runs the serial trainer unchanged: the same model as `morsegs train`.
+ *
+ * This is the first slice of distributed training. Not done yet: ghosts are trained
+ * locally rather than read-only and are never exchanged with their owners during
+ * training (blocks are independent until the merge), no migration of Gaussians across
+ * blocks (a Gaussian that moves out of its block is merged by its final position, so the
+ * union stays a partition), costs split by Gaussians only (not pixels), no per-rank
+ * checkpoint/resume. A failing rank ends the whole run (MPI_Abort) with its message. */
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "apps/mgs_cli.h"
+#include "core/mgs_core.h"
+#include "render/mgs_visibility.h"
+#include "train/mgs_train.h"
+#include "train/mgs_strategy.h"
+#include "train/mgs_partition.h"
+#ifdef MGS_HAVE_MPI
+#include <mpi.h>
+#endif
+
+int mgs_cmd_train(int argc, char **argv);
+
+#ifndef MGS_HAVE_MPI
+int mgs_cmd_train_mpi(int argc, char **argv) {
+  (void)argc; (void)argv;
+  fprintf(stderr, "morsegs train: --mpi: this morsegs was built without MPI (install libopenmpi-dev, rebuild)\n");
+  return 2;
+}
+#else
+
+typedef struct mpi_opts {
+  const char *data, *run;
+  int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
+  double margin; /* ghost margin in tiles */
+  unsigned long long seed;
+} mpi_opts;
+
+static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap) {
+  memset(o, 0, sizeof *o);
+  o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    char *end = NULL;
+    if (!strcmp(a, "--mpi")) continue;
+    if (!strcmp(a, "-o") || !strcmp(a, "--output")) { if (!v) goto need; o->run = v; i++; }
+    else if (!strcmp(a, "--iters")) { if (!v) goto need; o->iters = (int)strtol(v, &end, 10); i++; if (*end || o->iters < 1) goto bad; }
+    else if (!strcmp(a, "--sh-degree")) { if (!v) goto need; o->sh_degree = (int)strtol(v, &end, 10); i++; if (*end || o->sh_degree < 0 || o->sh_degree > 3) goto bad; }
+    else if (!strcmp(a, "--seed")) { if (!v) goto need; o->seed = strtoull(v, &end, 10); i++; if (*end || *v == '-') goto bad; }
+    else if (!strcmp(a, "--image-cache-mb")) { if (!v) goto need; o->cache_mb = (int)strtol(v, &end, 10); i++; if (*end || o->cache_mb < 0) goto bad; }
+    else if (!strcmp(a, "--ghost-margin")) { if (!v) goto need; o->margin = strtod(v, &end); i++; if (*end || !(o->margin >= 0)) goto bad; }
+    else if (!strcmp(a, "--strategy")) { if (!v) goto need; i++; if (!strcmp(v, "adc")) o->strategy_adc = 1; else if (!strcmp(v, "none")) o->strategy_adc = 0; else goto bad; }
+    else if (!strcmp(a, "--white")) o->white = 1;
+    else if (!strcmp(a, "--black")) o->white = 0;
+    else if (!strcmp(a, "--sparse-adam")) o->sparse = 1;
+    else if (!strcmp(a, "--dense-adam")) o->sparse = 0;
+    else if (!strcmp(a, "--quiet")) o->quiet = 1;
+    else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
+                                     "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
+                                     "--image-cache-mb, --ghost-margin, --quiet)", a); return 0; }
+    else if (!o->data) o->data = a;
+    else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
+    continue;
+  need:
+    snprintf(msg, cap, "%s needs a value", a);
+    return 0;
+  bad:
+    snprintf(msg, cap, "bad value '%s' for %s", v, a);
+    return 0;
+  }
+  if (!o->data || !o->run) { snprintf(msg, cap, "DATA and -o RUN are required"); return 0; }
+  return 1;
+}
+
+/* Ends every rank: a message naming this rank, then MPI_Abort. */
+static void die(int rank, const char *what) {
+  fprintf(stderr, "morsegs train --mpi: rank %d: %s\n", rank, what);
+  fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  exit(1);
+}
+
+static int train_blocks(const mpi_opts *mo, int rank, int size) {
+  mgs_error err;
+  mgs_error_clear(&err);
+  double t_start = MPI_Wtime();
+  mgs_dataset_options dopt;
+  mgs_dataset_options_default(&dopt);
+  dopt.white_background = mo->white;
+  dopt.load_images = 0; /* each rank decodes only the views it trains on */
+  mgs_dataset *ds = NULL;
+  if (mgs_dataset_load(mo->data, &dopt, &ds, &err)) die(rank, err.msg);
+  if (!ds->init_points || ds->init_points->n == 0) die(rank, "the dataset has no initial points (points3d.ply / SfM points): needed to partition the scene");
+  const mgs_point_cloud *pc = ds->init_points;
+  mgs_partition *part = NULL;
+  if (mgs_partition_build(pc->xyz, pc->n, size, 0, &part, &err)) die(rank, err.msg);
+  /* owned points and ghosts within the margin of the block's box */
+  double m = mo->margin * part->tile;
+  const double *lo = part->lo[rank], *hi = part->hi[rank];
+  size_t n_local = 0, n_owned = 0;
+  float *xyz = malloc(pc->n * 3 * sizeof(float)), *rgb = malloc(pc->n * 3 * sizeof(float));
+  if (!xyz || !rgb) die(rank, "out of memory");
+  for (size_t i = 0; i < pc->n; i++) {
+    const float *p = pc->xyz + 3 * i;
+    int own = mgs_partition_owner(part, p) == rank;
+    int near = p[0] >= lo[0] - m && p[0] <= hi[0] + m && p[1] >= lo[1] - m && p[1] <= hi[1] + m && p[2] >= lo[2] - m &&
+               p[2] <= hi[2] + m;
+    if (!own && !near) continue;
+    memcpy(xyz + 3 * n_local, p, 3 * sizeof(float));
+    memcpy(rgb + 3 * n_local, pc->rgb + 3 * i, 3 * sizeof(float));
+    n_local++;
+    n_owned += own;
+  }
+  if (n_owned == 0) die(rank, "the partition gave this rank no points (fewer tiles than ranks?)");
+  mgs_gaussians *g0 = NULL;
+  if (mgs_init_from_points(xyz, rgb, n_local, mo->sh_degree, &g0, &err)) die(rank, err.msg);
+  free(xyz); free(rgb);
+  /* the training views that see this block: its Gaussians' tiles in their frustum */
+  mgs_visibility *vis = mgs_visibility_create(part->tile);
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  size_t nv = ds->n_views[MGS_SPLIT_TRAIN], kept = 0;
+  mgs_view *views = malloc((nv ? nv : 1) * sizeof *views);
+  if (!vis || !views) die(rank, "out of memory");
+  for (size_t v = 0; v < nv; v++) {
+    const uint32_t *idx;
+    size_t n_idx;
+    if (mgs_visibility_query(vis, g0, &ds->views[MGS_SPLIT_TRAIN][v].cam, &rs, &idx, &n_idx, &err)) die(rank, err.msg);
+    if (n_idx > 0) views[kept++] = ds->views[MGS_SPLIT_TRAIN][v];
+  }
+  mgs_visibility_destroy(vis);
+  if (!kept) die(rank, "no training view sees this rank's block");
+  /* a dataset holding those views (borrowed, so never destroyed as a whole) */
+  mgs_dataset sub = *ds;
+  sub.views[MGS_SPLIT_TRAIN] = views;
+  sub.n_views[MGS_SPLIT_TRAIN] = kept;
+  mgs_train_options o;
+  mgs_train_options_default(&o);
+  o.iterations = mo->iters;
+  o.sh_degree = mo->sh_degree;
+  o.seed = mo->seed + (uint64_t)rank;
+  o.visibility = -1;
+  o.sparse_adam = mo->sparse;
+  o.image_cache_mb = (size_t)mo->cache_mb;
+  o.adc.white_background = mo->white;
+  mgs_trainer *t = NULL;
+  if (mgs_trainer_create(&sub, &o, g0, mo->strategy_adc ? mgs_strategy_adc_create(&o.adc) : NULL, &t, &err)) die(rank, err.msg);
+  if (!mo->quiet)
+    mgs_info("rank %d of %d: %zu owned + %zu ghost Gaussians, %zu of %zu training views", rank, size, n_owned,
+             n_local - n_owned, kept, nv);
+  double t0 = MPI_Wtime();
+  if (mgs_trainer_run(t, &err)) die(rank, err.msg);
+  double train_s = MPI_Wtime() - t0;
+  /* the Gaussians this rank owns by their final means, packed group by group */
+  const mgs_gaussians *g = mgs_trainer_model(t);
+  size_t n_keep = 0;
+  uint8_t *keep = malloc(g->n ? g->n : 1);
+  if (!keep) die(rank, "out of memory");
+  for (size_t i = 0; i < g->n; i++) n_keep += keep[i] = (uint8_t)(mgs_partition_owner(part, g->mean + 3 * i) == rank);
+  int dims = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) dims += mgs_param_dim((mgs_param_group)k);
+  float *pack = malloc((n_keep ? n_keep : 1) * (size_t)dims * sizeof(float));
+  if (!pack) die(rank, "out of memory");
+  size_t off = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+    int d = mgs_param_dim((mgs_param_group)k);
+    const float *src = mgs_gaussians_group((mgs_gaussians *)g, (mgs_param_group)k);
+    for (size_t i = 0; i < g->n; i++)
+      if (keep[i]) { memcpy(pack + off, src + i * (size_t)d, (size_t)d * sizeof(float)); off += (size_t)d; }
+  }
+  free(keep);
+  if (n_keep * (size_t)dims > INT_MAX) die(rank, "too many Gaussians for one MPI message");
+  int cnt = (int)(n_keep * (size_t)dims);
+  int *counts = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL, *displs = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL;
+  MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  long long total = 0;
+  if (rank == 0)
+    for (int r = 0; r < size; r++) { displs[r] = (int)total; total += counts[r]; }
+  if (rank == 0 && total > INT_MAX) die(rank, "the merged model is too large for one MPI message");
+  float *all = rank == 0 ? malloc((size_t)(total ? total : 1) * sizeof(float)) : NULL;
+  if (rank == 0 && !all) die(rank, "out of memory for the merged model");
+  MPI_Gatherv(pack, cnt, MPI_FLOAT, all, counts, displs, MPI_FLOAT, 0, MPI_COMM_WORLD);
+  free(pack);
+  /* scalars: loss mean, time balance */
+  double loss = mgs_trainer_last_loss(t), loss_sum = 0, tmax = 0, tsum = 0;
+  MPI_Reduce(&loss, &loss_sum, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+  MPI_Reduce(&train_s, &tmax, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+  MPI_Reduce(&train_s, &tsum, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+  unsigned long long mine[4] = {n_owned, n_local - n_owned, kept, n_keep}, *rows = rank == 0 ? calloc((size_t)size * 4, sizeof *rows) : NULL;
+  MPI_Gather(mine, 4, MPI_UNSIGNED_LONG_LONG, rows, 4, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+  int rc = 0;
+  if (rank == 0) {
+    size_t n_all = (size_t)total / (size_t)dims;
+    mgs_gaussians *merged = mgs_gaussians_create(n_all ? n_all : 1, g->sh_degree);
+    size_t first;
+    if (!merged || mgs_gaussians_append(merged, n_all, &first, &err)) die(rank, "out of memory for the merged model");
+    /* unpack rank by rank: each block is its ranks' rows, group by group */
+    size_t row0 = 0;
+    for (int r = 0; r < size; r++) {
+      size_t nr = (size_t)counts[r] / (size_t)dims;
+      const float *src = all + displs[r];
+      for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+        size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+        memcpy(mgs_gaussians_group(merged, (mgs_param_group)k) + row0 * d, src, nr * d * sizeof(float));
+        src += nr * d;
+      }
+      row0 += nr;
+    }
+    mgs_status st = mgs_mkdir_p(mo->run, &err);
+    if (!st) st = mgs_run_write_ply(mo->run, mo->iters, merged, &err);
+    if (!st) st = mgs_run_write_cameras(mo->run, ds, &err);
+    if (!st) {
+      char abs_data[PATH_MAX];
+      if (!realpath(mo->data, abs_data)) snprintf(abs_data, sizeof abs_data, "%s", mo->data);
+      mgs_settings s;
+      mgs_settings_init(&s);
+      mgs_settings_seti(&s, "sh_degree", mo->sh_degree);
+      mgs_settings_set(&s, "source_path", abs_data, 1);
+      mgs_settings_set(&s, "model_path", mo->run, 1);
+      mgs_settings_set(&s, "white_background", mo->white ? "True" : "False", 0);
+      mgs_settings_seti(&s, "downscale", 1);
+      mgs_settings_seti(&s, "test_every", 8);
+      mgs_settings_seti(&s, "iterations", mo->iters);
+      mgs_settings_seti(&s, "seed", (long long)mo->seed);
+      mgs_settings_seti(&s, "mpi_ranks", size);
+      char *cfg = mgs_path_join(mo->run, "cfg_args");
+      st = mgs_settings_write(cfg, &s, &err);
+      free(cfg);
+      mgs_settings_free(&s);
+    }
+    if (!st) {
+      /* per-rank figures */
+      char *path = mgs_path_join(mo->run, "mpi_stats.json");
+      size_t cap = 512 + (size_t)size * 160, len = 0;
+      char *text = malloc(cap);
+      if (!path || !text) die(rank, "out of memory");
+      len += (size_t)snprintf(text + len, cap - len, "{\n  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
+                              "  \"train_seconds_max\": %.3f,\n  \"load_imbalance\": %.3f,\n  \"bytes_gathered\": %lld,\n"
+                              "  \"seconds\": %.3f,\n  \"per_rank\": [\n", size, n_all, loss_sum / size, tmax,
+                              tsum > 0 ? tmax / (tsum / size) : 1.0, total * (long long)sizeof(float), MPI_Wtime() - t_start);
+      for (int r = 0; r < size; r++)
+        len += (size_t)snprintf(text + len, cap - len, "    {\"owned_init\": %llu, \"ghosts_init\": %llu, \"views\": %llu, \"merged\": %llu}%s\n",
+                                rows[4 * r], rows[4 * r + 1], rows[4 * r + 2], rows[4 * r + 3], r + 1 < size ? "," : "");
+      len += (size_t)snprintf(text + len, cap - len, "  ]\n}\n");
+      st = mgs_write_file_atomic(path, text, len, &err);
+      free(path); free(text);
+    }
+    if (st) { fprintf(stderr, "morsegs train --mpi: rank 0: %s\n", err.msg); rc = 1; }
+    else if (!mo->quiet)
+      printf("trained %d blocks on %d ranks (%d iterations each): %zu Gaussians merged -> %s/point_cloud/iteration_%d/point_cloud.ply\n",
+             size, size, mo->iters, n_all, mo->run, mo->iters);
+    mgs_gaussians_destroy(merged);
+  }
+  free(all); free(counts); free(displs); free(rows);
+  mgs_trainer_destroy(t);
+  free(views);
+  mgs_partition_destroy(part);
+  mgs_dataset_destroy(ds);
+  return rc;
+}
+
+int mgs_cmd_train_mpi(int argc, char **argv) {
+  int provided = 0;
+  if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+    fprintf(stderr, "morsegs train --mpi: MPI_Init failed\n");
+    return 1;
+  }
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  int rc;
+  if (size == 1) {
+    /* one process: the serial trainer, so -np 1 gives exactly `morsegs train`'s model */
+    char **av = malloc((size_t)argc * sizeof *av);
+    int ac = 0;
+    for (int i = 0; i < argc; i++)
+      if (strcmp(argv[i], "--mpi")) av[ac++] = argv[i];
+    rc = mgs_cmd_train(ac, av);
+    free(av);
+  } else {
+    mpi_opts mo;
+    char msg[512];
+    if (!parse_opts(argc, argv, &mo, msg, sizeof msg)) {
+      if (rank == 0) fprintf(stderr, "morsegs train --mpi: %s\n", msg);
+      MPI_Finalize();
+      return 2;
+    }
+    rc = train_blocks(&mo, rank, size);
+    int any = 0;
+    MPI_Allreduce(&rc, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    rc = any;
+  }
+  MPI_Finalize();
+  return rc;
+}
+#endif

@@ -1,0 +1,145 @@
+/* `morsegs train --mpi` through mpirun on one machine: -np 1 writes the same .ply bytes
+ * as `morsegs train`; -np 2 and -np 4 partition the scene (every initial point owned by
+ * one rank), train and merge a model whose Gaussians are the union of what each rank
+ * owns; a bad option and a rank that fails end the run with a message naming them. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <cjson/cJSON.h>
+#include "mgs_test.h"
+#include "core/mgs_fs.h"
+#include "core/mgs_gaussians.h"
+#include "core/mgs_ply.h"
+
+static const char *cli, *mpirun;
+static char root[512], data[600], logp[600];
+
+static int sh(const char *fmt, const char *a, const char *b, int np) {
+  char cmd[4096];
+  char body[3000];
+  snprintf(body, sizeof body, fmt, a ? a : "", b ? b : "");
+  if (np > 0)
+    snprintf(cmd, sizeof cmd, "MGS_THREADS=1 '%s' --oversubscribe -np %d '%s' %s > '%s' 2>&1", mpirun, np, cli, body, logp);
+  else
+    snprintf(cmd, sizeof cmd, "MGS_THREADS=1 '%s' %s > '%s' 2>&1", cli, body, logp);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+static char *slurp(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *s = malloc((size_t)n + 1);
+  if (s && fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); s = NULL; }
+  if (s) s[n] = 0;
+  fclose(f);
+  return s;
+}
+
+static int same_file(const char *a, const char *b) {
+  char *x = slurp(a), *y = slurp(b);
+  int same = x && y && strlen(x) == strlen(y); /* ply: binary, compare whole files below */
+  if (same) {
+    FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+    int ca, cb;
+    do { ca = fgetc(fa); cb = fgetc(fb); } while (ca == cb && ca != EOF);
+    same = ca == cb;
+    fclose(fa); fclose(fb);
+  }
+  free(x); free(y);
+  return same;
+}
+
+static void test_np1_identical(void) {
+  char run_a[700], run_b[700], pa[800], pb[800];
+  snprintf(run_a, sizeof run_a, "%s/serial", root);
+  snprintf(run_b, sizeof run_b, "%s/np1", root);
+  CHECK(sh("train '%s' -o '%s' --iters 25 --seed 4 --quiet", data, run_a, 0) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 25 --seed 4 --quiet", data, run_b, 1) == 0);
+  snprintf(pa, sizeof pa, "%s/point_cloud/iteration_25/point_cloud.ply", run_a);
+  snprintf(pb, sizeof pb, "%s/point_cloud/iteration_25/point_cloud.ply", run_b);
+  CHECK_MSG(same_file(pa, pb), "-np 1 differs from the serial trainer (%s, %s)", pa, pb);
+}
+
+static void blocks(int np) {
+  char run[700], p[800];
+  snprintf(run, sizeof run, "%s/np%d", root, np);
+  CHECK_MSG(sh("train --mpi '%s' -o '%s' --iters 20 --seed 1 --quiet", data, run, np) == 0, "-np %d failed", np);
+  snprintf(p, sizeof p, "%s/mpi_stats.json", run);
+  char *text = slurp(p);
+  cJSON *j = text ? cJSON_Parse(text) : NULL;
+  CHECK_MSG(j != NULL, "no %s", p);
+  if (!j) { free(text); return; }
+  CHECK(cJSON_GetObjectItem(j, "ranks")->valueint == np);
+  cJSON *pr = cJSON_GetObjectItem(j, "per_rank");
+  CHECK(cJSON_GetArraySize(pr) == np);
+  double owned = 0, merged = 0;
+  int all_own = 1;
+  for (int r = 0; r < cJSON_GetArraySize(pr); r++) {
+    cJSON *e = cJSON_GetArrayItem(pr, r);
+    owned += cJSON_GetObjectItem(e, "owned_init")->valuedouble;
+    merged += cJSON_GetObjectItem(e, "merged")->valuedouble;
+    all_own &= cJSON_GetObjectItem(e, "owned_init")->valuedouble > 0;
+  }
+  CHECK_MSG(owned == 3000, "-np %d: %.0f initial points owned, 3000 expected", np, owned);
+  CHECK(all_own);
+  double n = cJSON_GetObjectItem(j, "gaussians")->valuedouble;
+  CHECK(n == merged && n > 0);
+  snprintf(p, sizeof p, "%s/point_cloud/iteration_20/point_cloud.ply", run);
+  mgs_gaussians *g = NULL;
+  mgs_error err;
+  CHECK_OK(mgs_ply_read_gaussians(p, &g, &err), &err);
+  if (g) CHECK(g->n == (size_t)n);
+  mgs_gaussians_destroy(g);
+  cJSON_Delete(j);
+  free(text);
+}
+
+static void test_np2(void) { blocks(2); }
+static void test_np4(void) { blocks(4); }
+
+static void test_errors(void) {
+  char run[700];
+  snprintf(run, sizeof run, "%s/bad", root);
+  CHECK(sh("train --mpi '%s' -o '%s' --densify-from 3", data, run, 2) == 2);
+  char *log = slurp(logp);
+  CHECK(log && strstr(log, "--densify-from"));
+  free(log);
+  /* no initial points: every rank fails, the run ends with a message naming a rank */
+  char bare[700];
+  snprintf(bare, sizeof bare, "%s/bare", root);
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "cp -r '%s' '%s' && rm '%s/points3d.ply'", data, bare, bare);
+  CHECK(system(cmd) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 5", bare, run, 2) != 0);
+  log = slurp(logp);
+  CHECK_MSG(log && strstr(log, "rank ") && strstr(log, "no initial points"), "log: %s", log ? log : "");
+  free(log);
+}
+
+int main(int argc, char **argv) {
+  cli = getenv("MGS_CLI");
+  mpirun = argc > 1 ? argv[1] : "mpirun";
+  if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
+  /* Open MPI refuses root unless told; test machines often run as root */
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  snprintf(root, sizeof root, "/tmp/mgs_test_mpi_%d", (int)getpid());
+  snprintf(data, sizeof data, "%s/city", root);
+  snprintf(logp, sizeof logp, "%s/log.txt", root);
+  mgs_error err;
+  mgs_remove_tree(root, &err);
+  CHECK_OK(mgs_mkdir_p(root, &err), &err);
+  CHECK(sh("scene --builtin city --size 1 -o '%s' --width 40 --height 40 --spp 1 --views 12 --test-views 2 "
+           "--init-points 3000 -q%s", data, "", 0) == 0);
+  RUN(test_np1_identical);
+  RUN(test_np2);
+  RUN(test_np4);
+  RUN(test_errors);
+  mgs_remove_tree(root, &err);
+  return mgs_test_finish();
+}

@@ -1,0 +1,50 @@
+/* Spatial partition of a scene into blocks for distributed training (train/partition.c):
+ * tiles (cubes of a fixed side, as the visibility's) ordered along a Morton space-filling
+ * curve, cut into `ranks` contiguous runs of about equal cost (the Gaussians in them), so
+ * each block is compact in space. A point belongs to the block whose run holds its tile's
+ * curve position (every point of space has exactly one owner, also points born later
+ * outside the initial tiles). Pure computation: the same input gives the same partition
+ * on every rank, so none is sent. */
+#ifndef MGS_PARTITION_H
+#define MGS_PARTITION_H
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mgs_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_partition {
+  int ranks;
+  double tile;            /* tile side, world units */
+  uint64_t *split;        /* ranks + 1 curve positions: rank r owns [split[r], split[r+1]) */
+  double (*lo)[3], (*hi)[3]; /* per rank: box of its tiles that held points (empty: lo > hi) */
+  size_t *count;          /* per rank: points owned at build time */
+} mgs_partition;
+
+/* tile <= 0: chosen as the visibility's automatic side (~256 points a tile). Errors:
+ * ranks < 1, no finite point. */
+mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double tile, mgs_partition **out, mgs_error *err);
+void mgs_partition_destroy(mgs_partition *p);
+/* The owner of a point (non-finite coordinates: rank 0). */
+int mgs_partition_owner(const mgs_partition *p, const float xyz[3]);
+
+/* perm[j] = the point that comes j-th along the Morton curve of tiles of side `tile`
+ * (ties by index; non-finite points first). Used to lay Gaussians out in memory in
+ * spatial order, so the few a view sees share cache lines and pages. */
+mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, uint32_t *perm, mgs_error *err);
+
+/* Views ordered for locality: chunk_of[v] = the chunk of `chunk` consecutive views along
+ * the Morton curve of their camera centres (n x 3 floats). */
+mgs_status mgs_partition_view_chunks(const float *centers, size_t n, double tile, size_t chunk, uint32_t *chunk_of,
+                                     mgs_error *err);
+/* Reorders perm (a permutation of 0..n-1) so each chunk's views are consecutive: chunks
+ * in the order their first view appears in perm, views within a chunk in perm's order
+ * (a random perm stays random at both levels). scratch: 2n entries. */
+void mgs_partition_order_by_chunks(const uint32_t *chunk_of, size_t n, uint32_t *perm, uint32_t *scratch);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

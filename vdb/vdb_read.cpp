@@ -2,6 +2,7 @@
 #include "vdb/vdb_read.hpp"
 
 #include <openvdb/io/Stream.h>
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -222,6 +223,10 @@ bool write_all(int fd, const char *p, size_t n) {
 // read back with OpenVDB's writer (whose output is consistent by construction). Status
 // byte 'O' + stream, or 'E' + message.
 [[noreturn]] void child_main(int fd, const std::vector<char> &b, bool want_grid, size_t file_bytes) {
+  // glibc's heap-corruption reports and OpenVDB's warnings would add lines to the
+  // caller's one-line error: the parent says what happened.
+  const int devnull = open("/dev/null", O_WRONLY);
+  if (devnull >= 0) dup2(devnull, 2);
 #ifndef MGS_ASAN  // ASan reserves terabytes of address space: no cap under it
   struct rlimit rl;
   const rlim_t cap = (rlim_t)(vm_bytes() + 64 * file_bytes + ((size_t)512 << 20));

@@ -73,7 +73,7 @@ struct cursor {
   bool metamap(size_t limit, const char *what, std::string *cls = nullptr) {
     uint32_t count = 0;
     if (!get(&count, what)) return false;
-    if (count > (limit - pos) / 12) return fail(what);  // each entry needs >= 12 bytes
+    if (pos > limit || count > (limit - pos) / 12) return fail(what);  // each entry needs >= 12 bytes
     for (uint32_t i = 0; i < count; i++) {
       uint32_t bytes = 0;
       std::string name, type;
@@ -131,6 +131,10 @@ mgs_status check_header(cursor &c, vdb_index *out) {
       return c.st;
     if (c.pos > (size_t)block_pos) return c.fail("grid header"), c.st;
     out->names.push_back(strip_suffix(name));
+    // Grids saved as half floats carry a suffix on their type; they read back as float.
+    static const std::string half = "_HalfFloat";
+    if (type.size() > half.size() && type.compare(type.size() - half.size(), half.size(), half) == 0)
+      type.resize(type.size() - half.size());
     out->types.push_back(type);
     out->classes.push_back(cls);
     out->begin.push_back(desc_begin);

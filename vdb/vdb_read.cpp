@@ -194,14 +194,6 @@ std::string describe(const std::exception &e) {
   return e.what();
 }
 
-#if defined(__SANITIZE_ADDRESS__)
-#define MGS_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define MGS_ASAN 1
-#endif
-#endif
-
 size_t vm_bytes() {
   std::FILE *f = std::fopen("/proc/self/statm", "r");
   unsigned long pages = 0;
@@ -231,12 +223,12 @@ bool write_all(int fd, const char *p, size_t n) {
   // caller's one-line error: the parent says what happened.
   const int devnull = open("/dev/null", O_WRONLY);
   if (devnull >= 0) dup2(devnull, 2);
-#ifndef MGS_ASAN  // ASan reserves terabytes of address space: no cap under it
+  // The cap is relative to the address space at fork, so it also holds under ASan (whose
+  // shadow and allocator regions are reserved at start-up).
   struct rlimit rl;
   const rlim_t cap = (rlim_t)(vm_bytes() + 64 * file_bytes + ((size_t)512 << 20));
   rl.rlim_cur = rl.rlim_max = cap;
   setrlimit(RLIMIT_AS, &rl);
-#endif
   std::string out;
   try {
     openvdb::MetaMap::Ptr meta;

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <errno.h>
+#include <signal.h>
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -166,6 +167,9 @@ static int read_all(int fd, void *p, size_t n) {
 
 /* The child: assimp on the file under an address-space cap; sends back
  * status (int32), then the message (256 bytes) or nv, nt (u64) and the arrays. */
+/* Present when built with a sanitizer (weak: null otherwise). */
+extern void __sanitizer_set_death_callback(void (*)(void)) __attribute__((weak));
+
 _Noreturn static void child_import(int fd, const char *path, size_t file_bytes) {
   /* relative to the address space at fork, so it also holds under ASan */
   FILE *f = fopen("/proc/self/statm", "r");
@@ -177,6 +181,11 @@ _Noreturn static void child_import(int fd, const char *path, size_t file_bytes) 
   /* glibc's heap-corruption reports would add lines to the one-line error */
   const int devnull = open("/dev/null", O_WRONLY);
   if (devnull >= 0) dup2(devnull, 2);
+  /* a crash here is reported by the parent: default dispositions, no sanitizer death
+     callback (libFuzzer's would record the contained crash as the parent's finding) */
+  const int sigs[5] = {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL};
+  for (int i = 0; i < 5; i++) signal(sigs[i], SIG_DFL);
+  if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(NULL);
   mgs_error err = {0};
   mgs_mesh *m = NULL;
   int32_t st = (int32_t)import_assimp(path, &m, &err);

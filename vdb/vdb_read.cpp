@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cctype>
 #include <cstring>
@@ -16,6 +17,9 @@
 #include <streambuf>
 
 #include "vdb/vdb_internal.hpp"
+
+// Present when built with a sanitizer (weak: null otherwise).
+extern "C" void __sanitizer_set_death_callback(void (*)(void)) __attribute__((weak));
 
 namespace mgs_vdb_detail {
 namespace {
@@ -223,6 +227,11 @@ bool write_all(int fd, const char *p, size_t n) {
   // caller's one-line error: the parent says what happened.
   const int devnull = open("/dev/null", O_WRONLY);
   if (devnull >= 0) dup2(devnull, 2);
+  // A crash here is reported by the parent: default dispositions, and no sanitizer death
+  // callback (under libFuzzer, the fuzzer's handlers would record the contained crash as
+  // a finding of the parent).
+  for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
+  if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);
   // The cap is relative to the address space at fork, so it also holds under ASan (whose
   // shadow and allocator regions are reserved at start-up).
   struct rlimit rl;

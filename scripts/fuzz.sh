@@ -1,21 +1,39 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (build-fuzz/) and runs each for $1 seconds
 # (default 20) from its seed corpus in tests/fuzz/corpus/NAME.
+#   scripts/fuzz.sh [SECONDS]      the test command's short run
+#   scripts/fuzz.sh --long [MIN]   depth run, not in CI: every target MIN minutes (>= 10,
+#                                  default 10); prints executions and findings per target
+# A finding stops the run (crash-*, leak-*, oom-*, timeout-* files in the working dir):
+# reduce it, fix it, and add it to tests/fuzz/corpus/NAME as a regression seed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-secs=${1:-20}
+secs=20
+if [ "${1:-}" = "--long" ]; then
+  mins=${2:-10}
+  [ "$mins" -ge 10 ] || { echo "fuzz.sh: --long runs at least 10 minutes per target" >&2; exit 2; }
+  secs=$((mins * 60))
+elif [ -n "${1:-}" ]; then
+  secs=$1
+fi
+only=${MGS_FUZZ_ONLY:-}
 CC=clang CXX=clang++ MGS_TARGET=fuzzers scripts/build.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMGS_FUZZ=ON -DMGS_NATIVE=OFF
 shopt -s nullglob
 ran=0
 for f in build-fuzz/tests/fuzz/fuzz_*; do
   [ -x "$f" ] || continue
   name=$(basename "$f")
+  [ -n "$only" ] && [[ ",$only," != *",$name,"* ]] && continue
   corpus=tests/fuzz/corpus/${name#fuzz_}
   work=build-fuzz/corpus-${name#fuzz_}
   mkdir -p "$work"
   [ -d "$corpus" ] && cp -n "$corpus"/* "$work"/ 2>/dev/null || true
   echo "fuzz: $name for ${secs}s"
-  "$f" -max_total_time="$secs" -rss_limit_mb=4096 -timeout=10 "$work" > "build-fuzz/$name.log" 2>&1 || { tail -50 "build-fuzz/$name.log"; echo "fuzz: $name FAILED"; exit 1; }
+  "$f" -max_total_time="$secs" -rss_limit_mb=4096 -timeout=10 -artifact_prefix="build-fuzz/$name-" "$work" \
+    > "build-fuzz/$name.log" 2>&1 || { tail -50 "build-fuzz/$name.log"; echo "fuzz: $name FAILED"; exit 1; }
+  # libFuzzer's last status line: "#N DONE cov: ... corp: ..."
+  stat=$(grep -E "^#[0-9]+" "build-fuzz/$name.log" | tail -1 | awk '{print $1, $3, $4, $5, $6, $7}')
+  echo "fuzz: $name clean after ${secs}s: ${stat}"
   ran=$((ran+1))
 done
 echo "fuzz: $ran fuzzers ran clean"

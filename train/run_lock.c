@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "core/mgs_fs.h"
+#include "core/mgs_log.h"
 #include "train/mgs_train.h"
 
 #define LOCK_NAME ".morsegs-train.lock"
@@ -71,20 +72,20 @@ mgs_status mgs_run_lock_acquire(const char *run_dir, mgs_run_lock **out, mgs_err
       free(path);
       return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write in the run folder (%s)", run_dir, strerror(e));
     }
-    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
-      int e = errno;
+    const int locked = flock(fd, LOCK_EX | LOCK_NB) == 0;
+    const int e = locked ? 0 : errno;
+    if (e == EWOULDBLOCK) {
       char buf[32] = {0};
       ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
       close(fd);
       free(path);
-      if (e == EWOULDBLOCK) {
-        long pid = n > 0 ? strtol(buf, NULL, 10) : 0;
-        if (pid > 0)
-          return mgs_error_set(err, MGS_ERR_IO, "%s: another morsegs train (pid %ld) is using this run folder; wait for it to end or choose another -o", run_dir, pid);
-        return mgs_error_set(err, MGS_ERR_IO, "%s: another morsegs train is using this run folder; wait for it to end or choose another -o", run_dir);
-      }
-      return mgs_error_set(err, MGS_ERR_IO, "%s: cannot lock the run folder (%s)", run_dir, strerror(e));
+      long pid = n > 0 ? strtol(buf, NULL, 10) : 0;
+      if (pid > 0)
+        return mgs_error_set(err, MGS_ERR_IO, "%s: another morsegs train (pid %ld) is using this run folder; wait for it to end or choose another -o", run_dir, pid);
+      return mgs_error_set(err, MGS_ERR_IO, "%s: another morsegs train is using this run folder; wait for it to end or choose another -o", run_dir);
     }
+    if (!locked) /* a file system without locks: go on unprotected rather than refuse to train */
+      mgs_log(MGS_LOG_WARN, "%s: cannot lock the run folder (%s); a second trainer on it would not be refused", run_dir, strerror(e));
     /* The previous holder unlinks the file on release: if it did so between our open and
      * our flock, we hold a lock on a file nobody else will see; try again. */
     struct stat a, b;
@@ -95,11 +96,11 @@ mgs_status mgs_run_lock_acquire(const char *run_dir, mgs_run_lock **out, mgs_err
     char pid[32];
     int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
     if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != len) {
-      int e = errno;
+      const int we = errno;
       close(fd);
       unlink(path);
       free(path);
-      return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write in the run folder (%s)", run_dir, strerror(e));
+      return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write in the run folder (%s)", run_dir, strerror(we));
     }
     mgs_run_lock *l = malloc(sizeof *l);
     if (!l) { close(fd); unlink(path); free(path); return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", run_dir); }

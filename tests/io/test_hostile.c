@@ -189,11 +189,33 @@ static void test_absurd_headers(void) {
   expect_claim(mgs_image_read_size(at("huge.png"), &w, &h, &c, &err), &err, "huge.png", "1000000x1000000");
 }
 
+/* Fuzzing regression (fuzz_mesh): a 4-triangle big-endian PLY that passes the header
+ * checks and makes assimp abort in its post-processing; the reader's child process takes
+ * the abort, the caller gets a one-line error. The corpus file has fuzz_mesh's format byte
+ * first. */
+static void test_assimp_abort_contained(void) {
+  const char *src = getenv("MGS_SOURCE_DIR");
+  if (!src) return;
+  char path[2048], *data = NULL;
+  size_t n = 0;
+  mgs_error err;
+  snprintf(path, sizeof path, "%s/tests/fuzz/corpus/mesh/regress_assimp_abort_be.ply", src);
+  CHECK_OK(mgs_read_file(path, &data, &n, &err), &err);
+  if (!data) return;
+  io_write_bytes(at("abort.ply"), data + 1, n - 1);
+  free(data);
+  mgs_mesh *m = NULL;
+  mgs_status st = mgs_mesh_read(at("abort.ply"), &m, &err);
+  CHECK_MSG(st == MGS_ERR_FORMAT && m == NULL && strstr(err.msg, "abort.ply"), "%s: %s", mgs_status_name(st), err.msg);
+  fprintf(stderr, "  %s\n", err.msg);
+}
+
 int main(void) {
   char cwd[512];
   if (!getcwd(cwd, sizeof cwd)) return 1;
   snprintf(root, sizeof root, "%s/%s", cwd, mgs_test_tmpdir("io_hostile"));
   RUN(test_truncated_mesh_cli);
   RUN(test_absurd_headers);
+  RUN(test_assimp_abort_contained);
   return mgs_test_finish();
 }

@@ -38,6 +38,7 @@
 #include "apps/mgs_cli.h"
 #include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
+#include "topo/mgs_diagram_plot.h"
 
 /* ---------------------------------------------------------------- the variant table */
 typedef struct variant_def {
@@ -814,6 +815,7 @@ fail:
   sl_free(&e.train_args);
   sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom);
   if (lock_fd >= 0) close(lock_fd);
+  mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;
 usage_fail:
   rc = 2;

@@ -7,6 +7,7 @@
 #include "mgs_test.h"
 #include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
+#include "topo/mgs_diagram_plot.h"
 
 static void test_verdict_rules(void) {
   exp_verdict v;
@@ -275,5 +276,6 @@ int main(void) {
   RUN(test_run_record);
   RUN(test_report);
   RUN(test_truth_topology);
+  mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return mgs_test_finish();
 }

@@ -153,6 +153,8 @@ static void test_report(void) {
   CHECK(h && fabs(cJSON_GetObjectItem(h, "change_mean")->valuedouble - (1414.2 / (2000 * pow(2, 0.6)) - 1)) < 0.01);
   h = hyp(root, "good", "H4");
   CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "yes"));
+  h = hyp(root, "good", "H4_ssim"); /* SSIM equal in every run */
+  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "no"));
   h = hyp(root, "bad", "H1");
   CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "worse"));
   h = hyp(root, "bad", "H4");

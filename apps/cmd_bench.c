@@ -12,6 +12,7 @@ static const bench benches[] = {
   {"vdb", mgs_bench_vdb, "alpha-field + SDF build time and memory vs OpenVDB ParticlesToLevelSet"},
   {"diagram", mgs_bench_diagram, "bottleneck/Wasserstein distances vs GUDHI"},
   {"topo", mgs_bench_topo, "narrow-band persistence time and memory vs dense peers"},
+  {"scale", mgs_bench_scale, "city N=1,2,4: s/iteration, peak RSS, bytes/Gaussian, image-cache hits"},
 };
 
 int mgs_cmd_bench(int argc, char **argv) {

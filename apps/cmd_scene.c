@@ -24,6 +24,10 @@ static void scene_usage(FILE *f) {
           "  -o, --output DIR      output folder (must not exist, be empty, or hold a dataset with --force)\n"
           "      --builtin NAME    a built-in procedural scene instead of MESH (see --list)\n"
           "      --detail N        finer builtin tessellation (1)\n"
+          "      --size N          with --builtin city: N x N blocks of 2 x 2 units (1); the city is not\n"
+          "                        normalized, cameras see a few units each (street level and low\n"
+          "                        aerial); defaults scale with N^2: 16 N^2 train and 4 N^2 test views,\n"
+          "                        10000 N^2 initial points\n"
           "      --list            list the built-in scenes\n"
           "      --views N         training views (60)\n"
           "      --test-views N    test views (20)\n"
@@ -67,16 +71,18 @@ static int parse_double(const char *s, double *out) {
 static void list_builtins(void) {
   for (size_t i = 0; i < mgs_assets_builtin_count(); i++)
     printf("%-8s %s\n", mgs_assets_builtin_name(i), mgs_assets_builtin_description(i));
+  printf("%-8s %s\n", "city", "N x N blocks of the above and towers on a ground slab (--size N), world units");
 }
 
 enum { OPT_BUILTIN = 256, OPT_DETAIL, OPT_LIST, OPT_VIEWS, OPT_TEST_VIEWS, OPT_WIDTH, OPT_HEIGHT, OPT_FOV, OPT_RADIUS,
        OPT_HEMI, OPT_SPEC, OPT_SPP, OPT_WHITE, OPT_BLACK, OPT_INIT, OPT_INIT_POINTS, OPT_INIT_NOISE, OPT_SEED,
-       OPT_ALLOW_OPEN, OPT_FORCE };
+       OPT_ALLOW_OPEN, OPT_FORCE, OPT_SIZE };
 
 int mgs_cmd_scene(int argc, char **argv) {
   static const struct option longopts[] = {
       {"output", required_argument, 0, 'o'}, {"builtin", required_argument, 0, OPT_BUILTIN},
       {"detail", required_argument, 0, OPT_DETAIL}, {"list", no_argument, 0, OPT_LIST},
+      {"size", required_argument, 0, OPT_SIZE},
       {"views", required_argument, 0, OPT_VIEWS}, {"test-views", required_argument, 0, OPT_TEST_VIEWS},
       {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT},
       {"fov", required_argument, 0, OPT_FOV}, {"radius", required_argument, 0, OPT_RADIUS},
@@ -89,8 +95,8 @@ int mgs_cmd_scene(int argc, char **argv) {
   mgs_scene_options o;
   mgs_scene_options_default(&o);
   const char *out_dir = NULL, *builtin = NULL;
-  long detail = 1;
-  int list = 0;
+  long detail = 1, city = 0;
+  int list = 0, views_set = 0, test_set = 0;
   optind = 1;
   opterr = 0;
   int c;
@@ -105,8 +111,9 @@ int mgs_cmd_scene(int argc, char **argv) {
     case OPT_BUILTIN: builtin = optarg; break;
     case OPT_DETAIL: ok = parse_long(optarg, 1, 16, &detail); break;
     case OPT_LIST: list = 1; break;
-    case OPT_VIEWS: ok = parse_long(optarg, 1, 100000, &lv); o.n_train = (int)lv; break;
-    case OPT_TEST_VIEWS: ok = parse_long(optarg, 0, 100000, &lv); o.n_test = (int)lv; break;
+    case OPT_SIZE: ok = parse_long(optarg, 1, 64, &city); break;
+    case OPT_VIEWS: ok = parse_long(optarg, 1, 100000, &lv); o.n_train = (int)lv; views_set = 1; break;
+    case OPT_TEST_VIEWS: ok = parse_long(optarg, 0, 100000, &lv); o.n_test = (int)lv; test_set = 1; break;
     case OPT_WIDTH: ok = parse_long(optarg, 1, 16384, &lv); o.width = (int)lv; break;
     case OPT_HEIGHT: ok = parse_long(optarg, 1, 16384, &lv); o.height = (int)lv; break;
     case OPT_FOV: ok = parse_double(optarg, &dv) && dv > 1 && dv < 170; o.fovx = dv * MGS_PI / 180.0; break;
@@ -151,17 +158,28 @@ int mgs_cmd_scene(int argc, char **argv) {
     return 2;
   }
   if (!out_dir) { fprintf(stderr, "morsegs scene: -o DIR is required\n"); return 2; }
+  int is_city = builtin && !strcmp(builtin, "city");
+  if (city && !is_city) { fprintf(stderr, "morsegs scene: --size is for --builtin city only\n"); return 2; }
+  if (is_city) {
+    if (!city) city = 1;
+    o.city_size = (int)city;
+    if (!views_set) o.n_train = (int)(16 * city * city);
+    if (!test_set) o.n_test = (int)(4 * city * city);
+    if (!o.init_points && o.init != MGS_SCENE_INIT_RANDOM) o.init_points = (size_t)(10000 * city * city);
+  }
 
   mgs_error err;
   mgs_error_clear(&err);
   mgs_mesh *mesh = NULL;
-  mgs_status s = builtin ? mgs_assets_builtin_detail(builtin, (int)detail, &mesh, &err) : mgs_mesh_read(mesh_path, &mesh, &err);
+  mgs_status s = is_city ? mgs_assets_city((int)city, (int)detail, &mesh, &err)
+                 : builtin ? mgs_assets_builtin_detail(builtin, (int)detail, &mesh, &err) : mgs_mesh_read(mesh_path, &mesh, &err);
   if (s != MGS_OK) {
     if (builtin && s == MGS_ERR_ARG) { fprintf(stderr, "morsegs scene: %s\n", err.msg); return 2; } /* unknown name */
     return mgs_cli_fail("scene", &err);
   }
   char label[512];
-  snprintf(label, sizeof label, "%s%s", builtin ? "builtin:" : "", builtin ? builtin : mesh_path);
+  if (is_city) snprintf(label, sizeof label, "builtin:city:%ld", city);
+  else snprintf(label, sizeof label, "%s%s", builtin ? "builtin:" : "", builtin ? builtin : mesh_path);
   o.mesh_name = label;
   mgs_scene_stats st;
   s = mgs_scene_render_dataset_stats(mesh, &o, out_dir, &st, &err);
@@ -169,8 +187,10 @@ int mgs_cmd_scene(int argc, char **argv) {
   if (s != MGS_OK) return mgs_cli_fail("scene", &err);
   static const char *init_names[] = {"none", "random", "surface"};
   printf("wrote %s: %d train + %d test views at %dx%d (%s), transforms_train.json, transforms_test.json,\n"
-         "  gt_mesh.ply (%zu triangles, normalized to [-1,1]^3), scene.json",
-         out_dir, o.n_train, o.n_test, o.width, o.height, o.hemisphere ? "upper hemisphere" : "full sphere", st.triangles);
+         "  gt_mesh.ply (%zu triangles, %s), scene.json",
+         out_dir, o.n_train, o.n_test, o.width, o.height,
+         is_city ? "city rig" : (o.hemisphere ? "upper hemisphere" : "full sphere"), st.triangles,
+         is_city ? "world units" : "normalized to [-1,1]^3");
   if (o.init != MGS_SCENE_INIT_NONE)
     printf(", points3d.ply (%zu %s points)", o.init_points ? o.init_points : (o.init == MGS_SCENE_INIT_RANDOM ? 100000 : 10000), init_names[o.init]);
   printf("\n  %.2f s (%.2f s ray casting, %.3g Mrays/s)\n", st.total_seconds, st.render_seconds,

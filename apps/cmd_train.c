@@ -23,15 +23,21 @@ static void usage(FILE *f) {
     "  DATA: NeRF-synthetic (transforms_train.json), nerfstudio (transforms.json) or COLMAP folder\n"
     "  -o, --output RUN        run folder (point_cloud/iteration_N/point_cloud.ply, cameras.json, cfg_args)\n"
     "      --iters N           iterations (30000)\n"
-    "      --downscale N       train on images downscaled by N (1)\n"
+    "      --downscale N       train on images resized to round(w/N) x round(h/N), bicubic (the\n"
+    "                          reference's -r N); without it, images wider than --max-width are\n"
+    "                          resized to that width (the reference's 1600 px cap)\n"
+    "      --max-width W       the cap (1600; 0 = train at full size)\n"
     "      --sh-degree N       max SH degree 0..3 (3), raised every 1000 iterations\n"
-    "      --white | --black   background (white)\n"
+    "      --white | --black   background (white for NeRF-synthetic, black for COLMAP and nerfstudio,\n"
+    "                          as the reference's defaults and its -w for the synthetic scenes)\n"
     "      --test-every N      COLMAP/nerfstudio: every Nth view is a test view (8)\n"
     "      --seed S            random seed (0)\n"
     "      --strategy adc      density control: adc (reference) or none\n"
     "      --init sfm|random   initial Gaussians: dataset points (falls back to random), or random\n"
     "      --random-points N   Gaussians of the random init (100000)\n"
     "      --densify-from N    (500)   --densify-until N (15000)   --densify-every N (100)\n"
+    "      --position-lr-max-steps N  length of the position learning-rate decay (30000, the\n"
+    "                          reference's, whatever --iters is; 0 = --iters)\n"
     "      --opacity-reset-every N (3000)   --grad-threshold G (2e-4)\n"
     "      --checkpoint-every N   periodic checkpoint RUN/checkpoint.mgsckpt (1000; 0 = off)\n"
     "      --save-at LIST      extra .ply saves at these iterations (7000)\n"
@@ -39,6 +45,14 @@ static void usage(FILE *f) {
     "      --force             reuse a non-empty RUN (its previous outputs are removed)\n"
     "      --threads N         worker threads (all cores)\n"
     "      --freeze            diagnostic: never update the parameters (test calibration)\n"
+    "  large scenes (docs/notes-scale.md):\n"
+    "      --visibility auto|on|off  project only the spatial tiles a view can see (same images;\n"
+    "                          auto: on when views see under half of the initial Gaussians)\n"
+    "      --vis-tile S        tile side in world units (auto: ~256 Gaussians a tile)\n"
+    "      --sparse-adam | --dense-adam  step only the Gaussians the view saw (differs from the\n"
+    "                          reference, which steps all; default: sparse when visibility is auto-on)\n"
+    "      --image-cache-mb N  stream train images through an 8-bit cache of N MiB with a prefetch\n"
+    "                          thread (0 = all images in memory as floats, the default)\n"
     "      --quiet             no progress bar\n"
     "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
     "  --normal-loss, --init levelset|lpvi.\n");
@@ -47,7 +61,8 @@ static void usage(FILE *f) {
 enum {
   O_ITERS = 1000, O_DOWNSCALE, O_SH, O_WHITE, O_BLACK, O_TEST_EVERY, O_SEED, O_STRATEGY, O_INIT,
   O_RANDOM_POINTS, O_DFROM, O_DUNTIL, O_DEVERY, O_RESET, O_GTHR, O_CKPT, O_SAVE_AT, O_RESUME, O_FORCE,
-  O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_HELP
+  O_THREADS, O_FREEZE, O_QUIET, O_TOPO, O_PERS, O_NORMAL, O_MAXW, O_LRSTEPS,
+  O_VIS, O_VIS_TILE, O_SPARSE, O_DENSE, O_CACHE, O_HELP
 };
 
 static int parse_int(const char *s, const char *name, int lo, int *out) {
@@ -131,8 +146,8 @@ static mgs_status clear_run(const char *run, mgs_error *err) {
 }
 
 static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
-                             const char *init, const char *save_at, int downscale, int white, int test_every,
-                             int resume, int force, int threads, int quiet, int random_points,
+                             const char *init, const char *save_at, int downscale, int max_width, int white,
+                             int test_every, int resume, int force, int threads, int quiet, int random_points,
                              unsigned long long seed);
 
 int mgs_cmd_train(int argc, char **argv) {
@@ -150,12 +165,18 @@ int mgs_cmd_train(int argc, char **argv) {
     {"force", no_argument, 0, O_FORCE}, {"threads", required_argument, 0, O_THREADS},
     {"freeze", no_argument, 0, O_FREEZE}, {"quiet", no_argument, 0, O_QUIET},
     {"topo-loss", optional_argument, 0, O_TOPO}, {"pers-loss", optional_argument, 0, O_PERS},
-    {"normal-loss", optional_argument, 0, O_NORMAL}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"normal-loss", optional_argument, 0, O_NORMAL}, {"max-width", required_argument, 0, O_MAXW},
+    {"position-lr-max-steps", required_argument, 0, O_LRSTEPS}, {"help", no_argument, 0, O_HELP},
+    {"visibility", required_argument, 0, O_VIS}, {"vis-tile", required_argument, 0, O_VIS_TILE},
+    {"sparse-adam", no_argument, 0, O_SPARSE}, {"dense-adam", no_argument, 0, O_DENSE},
+    {"image-cache-mb", required_argument, 0, O_CACHE}, {0, 0, 0, 0}};
   mgs_train_options o;
   mgs_train_options_default(&o);
+  o.visibility = -1; /* auto */
+  o.sparse_adam = -1;
   o.checkpoint_every = 1000;
   const char *run = NULL, *strategy = "adc", *init = "sfm", *save_at = "7000";
-  int downscale = 1, white = 1, test_every = 8, resume = 0, force = 0, threads = 0, quiet = 0, random_points = 100000;
+  int downscale = 1, max_width = 1600, white = -1, test_every = 8, resume = 0, force = 0, threads = 0, quiet = 0, random_points = 100000;
   unsigned long long seed = 0;
   int c;
   unsigned char given[O_HELP + 1] = {0}; /* flags typed on this command line */
@@ -167,6 +188,8 @@ int mgs_cmd_train(int argc, char **argv) {
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &o.iterations)) return 2; break;
       case O_DOWNSCALE: if (!parse_int(optarg, "--downscale", 1, &downscale)) return 2; break;
       case O_SH: if (!parse_int(optarg, "--sh-degree", 0, &o.sh_degree) || o.sh_degree > 3) { fprintf(stderr, "morsegs train: --sh-degree must be 0..3\n"); return 2; } break;
+      case O_MAXW: if (!parse_int(optarg, "--max-width", 0, &max_width)) return 2; break;
+      case O_LRSTEPS: if (!parse_int(optarg, "--position-lr-max-steps", 0, &o.lr_mean_max_steps)) return 2; break;
       case O_WHITE: white = 1; break;
       case O_BLACK: white = 0; break;
       case O_TEST_EVERY: if (!parse_int(optarg, "--test-every", 1, &test_every)) return 2; break;
@@ -200,6 +223,26 @@ int mgs_cmd_train(int argc, char **argv) {
       case O_TOPO: fprintf(stderr, "morsegs train: --topo-loss is not available yet (MorseGS persistence loss comes in a later issue)\n"); return 2;
       case O_PERS: fprintf(stderr, "morsegs train: --pers-loss is not available yet (Topology-GS PersLoss comes in a later issue)\n"); return 2;
       case O_NORMAL: fprintf(stderr, "morsegs train: --normal-loss is not available yet (comes in a later issue)\n"); return 2;
+      case O_VIS:
+        if (!strcmp(optarg, "auto")) o.visibility = -1;
+        else if (!strcmp(optarg, "on")) o.visibility = 1;
+        else if (!strcmp(optarg, "off")) o.visibility = 0;
+        else { fprintf(stderr, "morsegs train: --visibility must be auto, on or off (got '%s')\n", optarg); return 2; }
+        break;
+      case O_VIS_TILE: {
+        char *end;
+        o.vis_tile = strtod(optarg, &end);
+        if (!*optarg || *end || !(o.vis_tile > 0) || !isfinite(o.vis_tile)) { fprintf(stderr, "morsegs train: --vis-tile needs a positive number (got '%s')\n", optarg); return 2; }
+        break;
+      }
+      case O_SPARSE: o.sparse_adam = 1; break;
+      case O_DENSE: o.sparse_adam = 0; break;
+      case O_CACHE: {
+        int mb;
+        if (!parse_int(optarg, "--image-cache-mb", 0, &mb)) return 2;
+        o.image_cache_mb = (size_t)mb;
+        break;
+      }
       case 'h': case O_HELP: usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
@@ -220,6 +263,8 @@ int mgs_cmd_train(int argc, char **argv) {
 #define RESTORE_INT(flag, key, dst) if (!given[flag] && (v = mgs_settings_get(&prev, key))) dst = atoi(v)
       RESTORE_INT(O_ITERS, "iterations", o.iterations);
       RESTORE_INT(O_DOWNSCALE, "downscale", downscale);
+      RESTORE_INT(O_MAXW, "max_width", max_width);
+      RESTORE_INT(O_LRSTEPS, "position_lr_max_steps", o.lr_mean_max_steps);
       RESTORE_INT(O_SH, "sh_degree", o.sh_degree);
       RESTORE_INT(O_TEST_EVERY, "test_every", test_every);
       RESTORE_INT(O_RANDOM_POINTS, "random_points", random_points);
@@ -238,15 +283,16 @@ int mgs_cmd_train(int argc, char **argv) {
     }
     free(cfg);
   }
-  int rc = mgs_cmd_train_run(data, run, &o, strategy, init, save_at, downscale, white, test_every, resume, force, threads,
-                             quiet, random_points, seed);
+  if (given[O_DOWNSCALE] && !given[O_MAXW]) max_width = 0; /* a resolution given: no cap, as the reference */
+  int rc = mgs_cmd_train_run(data, run, &o, strategy, init, save_at, downscale, max_width, white, test_every, resume, force,
+                             threads, quiet, random_points, seed);
   mgs_settings_free(&prev);
   return rc;
 }
 
 static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
-                             const char *init, const char *save_at, int downscale, int white, int test_every,
-                             int resume, int force, int threads, int quiet, int random_points,
+                             const char *init, const char *save_at, int downscale, int max_width, int white,
+                             int test_every, int resume, int force, int threads, int quiet, int random_points,
                              unsigned long long seed) {
   mgs_train_options o = *op;
   if (!strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: --strategy morse is not available yet (comes in a later issue)\n"); return 2; }
@@ -258,13 +304,12 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     char *end;
     long v = strtol(p, &end, 10);
     if (end == p || v < 1) { fprintf(stderr, "morsegs train: --save-at needs a comma-separated list of iterations (got '%s')\n", save_at); return 2; }
-    if (v < o.iterations) saves[n_saves++] = (int)v;
+    if (v < o.iterations) saves[n_saves++] = (int)v; /* the final save is always written */
     p = *end == ',' ? end + 1 : end;
     if (*end && *end != ',') { fprintf(stderr, "morsegs train: bad --save-at list '%s'\n", save_at); return 2; }
   }
   if (threads) mgs_parallel_set_threads(threads);
   o.seed = seed;
-  o.adc.white_background = white;
   o.progress = !quiet;
   o.stop = &g_stop;
 
@@ -291,16 +336,22 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_dataset_options dopt;
   mgs_dataset_options_default(&dopt);
   dopt.downscale = downscale;
-  dopt.white_background = white;
-  dopt.load_images = 1;
+  dopt.max_width = max_width;
+  dopt.white_background = white; /* -1: by format */
+  dopt.load_images = o.image_cache_mb == 0; /* the cache decodes on demand */
   dopt.test_every = test_every;
   mgs_dataset *ds = NULL;
   int rc = 1;
   mgs_trainer *t = NULL;
+  mgs_run_lock *lock = NULL;
   mgs_status st = mgs_dataset_load(data, &dopt, &ds, &err);
   if (st) goto done;
+  white = ds->white_background;
+  /* the reference's extra opacity reset at densify_from comes with its white background */
+  o.adc.white_background = white;
+  /* the lock before --force clears anything: a second trainer on RUN is refused */
+  if ((st = mgs_run_lock_acquire(run, &lock, &err))) goto done;
   if (!resume && force && (st = clear_run(run, &err))) goto done;
-  if ((st = mgs_mkdir_p(run, &err))) goto done;
 
   mgs_gaussians *g0 = NULL;
   const char *init_used = init;
@@ -333,6 +384,9 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
   }
+  /* a checkpoint before anything else of the run is written: from here on a run killed
+     at any moment can --resume */
+  if (!resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   /* settings record and cameras before training (a crash still leaves them) */
   {
@@ -344,7 +398,8 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_set(&s, "source_path", abs_data, 1);
     mgs_settings_set(&s, "model_path", run, 1);
     mgs_settings_set(&s, "images", "images", 1);
-    mgs_settings_seti(&s, "resolution", downscale);
+    mgs_settings_seti(&s, "resolution", downscale > 1 ? downscale : -1);
+    mgs_settings_seti(&s, "max_width", max_width);
     mgs_settings_set(&s, "white_background", white ? "True" : "False", 0);
     mgs_settings_set(&s, "data_device", "cpu", 1);
     mgs_settings_set(&s, "eval", "True", 0);
@@ -358,7 +413,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_setf(&s, "lambda_dssim", o.lambda_dssim);
     mgs_settings_setf(&s, "position_lr_init", o.lr_mean_init);
     mgs_settings_setf(&s, "position_lr_final", o.lr_mean_final);
-    mgs_settings_seti(&s, "position_lr_max_steps", o.iterations);
+    mgs_settings_seti(&s, "position_lr_max_steps", o.lr_mean_max_steps > 0 ? o.lr_mean_max_steps : o.iterations);
     mgs_settings_setf(&s, "feature_lr", o.lr_sh_dc);
     mgs_settings_setf(&s, "feature_rest_lr", o.lr_sh_rest);
     mgs_settings_setf(&s, "opacity_lr", o.lr_opacity);
@@ -391,16 +446,17 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   sigaction(SIGINT, &sa, &old);
   mgs_info("training %s: %zu train views, %zu Gaussians, %d iterations", data, ds->n_views[MGS_SPLIT_TRAIN],
            mgs_trainer_model(t)->n, o.iterations);
+  /* each save is the model the reference writes at that iteration (mgs_trainer_run_to) */
   for (int i = 0; i <= n_saves && st == MGS_OK; i++) {
-    int until = i < n_saves ? saves[i] : o.iterations;
-    if (until <= mgs_trainer_iteration(t)) continue;
-    st = mgs_trainer_run_until(t, until, &err);
-    if (st == MGS_OK && i < n_saves) st = mgs_run_write_ply(run, until, mgs_trainer_model(t), &err);
+    int at = i < n_saves ? saves[i] : o.iterations;
+    if (at < mgs_trainer_model_iteration(t) && i < n_saves) continue;
+    st = mgs_trainer_run_to(t, at, &err);
+    if (st == MGS_OK && i < n_saves) st = mgs_run_write_ply(run, at, mgs_trainer_model(t), &err);
   }
   sigaction(SIGINT, &old, NULL);
   if (st == MGS_ERR_INTERRUPTED) {
     mgs_error e2;
-    mgs_status s2 = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &e2);
+    mgs_status s2 = mgs_run_write_ply(run, mgs_trainer_model_iteration(t), mgs_trainer_model(t), &e2);
     fprintf(stderr, "morsegs train: %s; %s\n", err.msg, s2 == MGS_OK ? "current model written" : e2.msg);
     write_stats(run, t, &e2);
     rc = 130;
@@ -418,6 +474,7 @@ done:
   if (rc == 1) mgs_cli_fail("train", &err);
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
+  mgs_run_lock_release(lock);
   free(ckpt);
   return rc;
 }

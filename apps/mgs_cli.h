@@ -23,6 +23,7 @@ int mgs_bench_train(int argc, char **argv);
 int mgs_bench_vdb(int argc, char **argv);
 int mgs_bench_topo(int argc, char **argv);
 int mgs_bench_diagram(int argc, char **argv);
+int mgs_bench_scale(int argc, char **argv);
 
 /* Prints "morsegs <cmd>: <message>" to stderr and returns 1 (for `return mgs_cli_fail(...)`). */
 int mgs_cli_fail(const char *cmd, const mgs_error *err);

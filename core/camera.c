@@ -79,6 +79,14 @@ void mgs_camera_downscale(mgs_camera *cam, int factor) {
   cam->fx /= factor; cam->fy /= factor; cam->cx /= factor; cam->cy /= factor;
 }
 
+void mgs_camera_resize(mgs_camera *cam, int w, int h) {
+  if (w < 1 || h < 1 || (w == cam->width && h == cam->height)) return;
+  double sx = (double)w / cam->width, sy = (double)h / cam->height;
+  cam->fx *= sx; cam->cx *= sx;
+  cam->fy *= sy; cam->cy *= sy;
+  cam->width = w; cam->height = h;
+}
+
 double mgs_camera_fovx(const mgs_camera *cam) { return 2.0 * atan(0.5 * cam->width / cam->fx); }
 double mgs_camera_fovy(const mgs_camera *cam) { return 2.0 * atan(0.5 * cam->height / cam->fy); }
 

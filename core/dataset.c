@@ -14,7 +14,8 @@ void mgs_dataset_options_default(mgs_dataset_options *o) {
   memset(o, 0, sizeof *o);
   o->format = MGS_DATASET_AUTO;
   o->downscale = 1;
-  o->white_background = 1;
+  o->max_width = 1600;
+  o->white_background = -1;
   o->load_images = 0;
   o->test_every = 8;
 }
@@ -187,7 +188,11 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
   d->format = fmt;
   d->root = mgs_strdup(dir);
   d->downscale = o.downscale;
-  for (int k = 0; k < 3; k++) d->background[k] = o.white_background ? 1.0f : 0.0f;
+  if (o.max_width < 0) return mgs_error_set(err, MGS_ERR_ARG, "%s: max_width must be >= 0", dir);
+  d->white_background = o.white_background < 0 ? fmt == MGS_DATASET_NERF_SYNTHETIC : o.white_background != 0;
+  d->max_width = o.downscale > 1 ? 0 : o.max_width;
+  for (int k = 0; k < 3; k++) d->background[k] = d->white_background ? 1.0f : 0.0f;
+  o.white_background = d->white_background;
   mgs_status st;
   switch (fmt) {
     case MGS_DATASET_NERF_SYNTHETIC: st = mgs_dataset_load_nerf_synthetic(d, &o, err); break;
@@ -199,8 +204,18 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
     st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: dataset has no views", dir);
   if (st == MGS_OK) {
     for (int s = 0; s < MGS_SPLIT_COUNT; s++)
-      for (size_t i = 0; i < d->n_views[s]; i++) mgs_camera_downscale(&d->views[s][i].cam, o.downscale);
-    scene_norm(d);
+      for (size_t i = 0; i < d->n_views[s]; i++) {
+        mgs_view *v = &d->views[s][i];
+        int w, h;
+        mgs_dataset_image_size(v->cam.width, v->cam.height, o.downscale, d->max_width, &w, &h);
+        if (w < 1 || h < 1) {
+          st = mgs_error_set(err, MGS_ERR_ARG, "%s: image %dx%d is smaller than the downscale factor %d", v->image_path,
+                             v->cam.width, v->cam.height, o.downscale);
+          break;
+        }
+        mgs_camera_resize(&v->cam, w, h);
+      }
+    if (st == MGS_OK) scene_norm(d);
   }
   if (st == MGS_OK && o.load_images) st = load_all_images(d, err);
   if (st != MGS_OK) {
@@ -209,6 +224,20 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
   }
   *out = d;
   return MGS_OK;
+}
+
+void mgs_dataset_image_size(int full_w, int full_h, int downscale, int max_width, int *w, int *h) {
+  if (downscale > 1) { /* Python's round(): halves to even, as nearbyint in the default mode */
+    *w = (int)nearbyint((double)full_w / downscale);
+    *h = (int)nearbyint((double)full_h / downscale);
+  } else if (max_width > 0 && full_w > max_width) {
+    double scale = (double)full_w / (double)max_width; /* int(orig / scale), as the reference */
+    *w = (int)((double)full_w / scale);
+    *h = (int)((double)full_h / scale);
+  } else {
+    *w = full_w;
+    *h = full_h;
+  }
 }
 
 mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err) {
@@ -242,12 +271,13 @@ mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err) {
   }
   mgs_image_destroy(img);
   if (!rgb) goto nomem;
-  if (d->downscale > 1) {
-    mgs_image *r2 = mgs_image_downscale(rgb, d->downscale);
+  /* composited first, then resized: the reference's order (PIL resize of the RGB image) */
+  if (rgb->width != v->cam.width || rgb->height != v->cam.height) {
+    mgs_image *r2 = mgs_image_resize_bicubic(rgb, v->cam.width, v->cam.height);
     mgs_image_destroy(rgb);
     rgb = r2;
     if (alpha) {
-      mgs_image *a2 = mgs_image_downscale(alpha, d->downscale);
+      mgs_image *a2 = mgs_image_resize_bicubic(alpha, v->cam.width, v->cam.height);
       mgs_image_destroy(alpha);
       alpha = a2;
       if (!alpha) goto nomem;

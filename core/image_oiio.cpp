@@ -81,8 +81,8 @@ extern "C" mgs_status mgs_image_read(const char *path, mgs_image **out, mgs_erro
   const ImageSpec &spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.nchannels > 64 || spec.depth > 1 ||
       (long long)spec.width * spec.height > kMaxPixels)
-    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: unsupported image size %dx%d with %d channels", path, spec.width,
-                         spec.height, spec.nchannels);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: header claims %dx%d pixels with %d channels (this reader takes up to %lld pixels and 64 channels)",
+                         path, spec.width, spec.height, spec.nchannels, kMaxPixels);
   mgs_image *img = mgs_image_create(spec.width, spec.height, spec.nchannels);
   if (!img) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for a %dx%d image", path, spec.width, spec.height);
   if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, img->data)) {
@@ -108,8 +108,8 @@ extern "C" mgs_status mgs_image_read_size(const char *path, int *width, int *hei
   const ImageSpec &spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.nchannels > 64 || spec.depth > 1 ||
       (long long)spec.width * spec.height > kMaxPixels)
-    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: unsupported image size %dx%d with %d channels", path, spec.width,
-                         spec.height, spec.nchannels);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: header claims %dx%d pixels with %d channels (this reader takes up to %lld pixels and 64 channels)",
+                         path, spec.width, spec.height, spec.nchannels, kMaxPixels);
   *width = spec.width;
   *height = spec.height;
   *channels = spec.nchannels;

@@ -1,6 +1,9 @@
 /* Mesh reading through assimp's C API: any format it reads (OBJ, PLY, OFF, ...),
  * triangulated, all meshes merged, vertices at identical positions welded (OBJ files
- * split vertices by normal or texture coordinate). */
+ * split vertices by normal or texture coordinate). Counts are checked against the file
+ * size before assimp reads (mesh_check.c) and assimp validates what it read before its
+ * other post-processing steps (aiProcess_ValidateDataStructure runs first); assimp runs in
+ * a forked child under an address-space cap, so a crash inside it is an error message. */
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -8,8 +11,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include "core/mesh_check.h"
 #include "core/mgs_mesh.h"
 
 typedef struct { float p[3]; uint32_t i; } keyed_vertex;
@@ -64,15 +72,12 @@ static void log_cb(const char *msg, char *user) {
   }
 }
 
-mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
+static mgs_status import_assimp(const char *path, mgs_mesh **out, mgs_error *err) {
   *out = NULL;
-  struct stat st;
-  if (stat(path, &st) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: mesh file not found", path);
-  if (!S_ISREG(st.st_mode)) return mgs_error_set(err, MGS_ERR_IO, "%s: not a regular file", path);
   log_error[0] = 0;
   struct aiLogStream stream = {log_cb, NULL};
   aiAttachLogStream(&stream);
-  const struct aiScene *sc = aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  const struct aiScene *sc = aiImportFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
   aiDetachLogStream(&stream);
   if (sc && log_error[0]) {
     aiReleaseImport(sc);
@@ -126,6 +131,129 @@ mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
     vo += am->mNumVertices;
   }
   aiReleaseImport(sc);
+  if (status != MGS_OK) {
+    mgs_mesh_destroy(m);
+    return status;
+  }
+  *out = m;
+  return MGS_OK;
+}
+
+static int write_all(int fd, const void *p, size_t n) {
+  const char *c = p;
+  while (n) {
+    ssize_t w = write(fd, c, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return 0;
+    c += w;
+    n -= (size_t)w;
+  }
+  return 1;
+}
+
+static int read_all(int fd, void *p, size_t n) {
+  char *c = p;
+  while (n) {
+    ssize_t r = read(fd, c, n);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return 0;
+    c += r;
+    n -= (size_t)r;
+  }
+  return 1;
+}
+
+/* The child: assimp on the file under an address-space cap; sends back
+ * status (int32), then the message (256 bytes) or nv, nt (u64) and the arrays. */
+#if defined(__SANITIZE_ADDRESS__)
+#define MGS_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define MGS_ASAN 1
+#endif
+#endif
+_Noreturn static void child_import(int fd, const char *path, size_t file_bytes) {
+#ifndef MGS_ASAN /* ASan reserves terabytes of address space: no cap under it */
+  FILE *f = fopen("/proc/self/statm", "r");
+  unsigned long pages = 0;
+  if (f) { if (fscanf(f, "%lu", &pages) != 1) pages = 0; fclose(f); }
+  struct rlimit rl;
+  rl.rlim_cur = rl.rlim_max = (rlim_t)pages * (rlim_t)sysconf(_SC_PAGESIZE) + (rlim_t)64 * file_bytes + ((rlim_t)1 << 30);
+  setrlimit(RLIMIT_AS, &rl);
+#endif
+  mgs_error err = {0};
+  mgs_mesh *m = NULL;
+  int32_t st = (int32_t)import_assimp(path, &m, &err);
+  int ok = write_all(fd, &st, sizeof st);
+  if (st != MGS_OK) {
+    ok = ok && write_all(fd, err.msg, sizeof err.msg);
+  } else {
+    uint64_t nv = m->nv, nt = m->nt;
+    ok = ok && write_all(fd, &nv, 8) && write_all(fd, &nt, 8) && write_all(fd, m->v, sizeof(float) * 3 * m->nv) &&
+         write_all(fd, m->t, sizeof(uint32_t) * 3 * m->nt);
+  }
+  _exit(ok ? 0 : 3);
+}
+
+mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
+  *out = NULL;
+  struct stat st;
+  if (stat(path, &st) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: mesh file not found", path);
+  if (!S_ISREG(st.st_mode)) return mgs_error_set(err, MGS_ERR_IO, "%s: not a regular file", path);
+  /* Counts against the file size first: assimp trusts them (mesh_check.h). */
+  mgs_status pre = mgs_mesh_precheck(path, err);
+  if (pre != MGS_OK) return pre;
+  /* Assimp itself runs in a forked child with an address-space cap: a crash or runaway
+   * allocation inside it on a file the checks above let through is this reader's error
+   * message, not the caller's crash. The child sends the merged arrays back. */
+  int fds[2];
+  if (pipe(fds) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: cannot create a pipe: %s", path, strerror(errno));
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid < 0) {
+    close(fds[0]); close(fds[1]);
+    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot fork the mesh reader: %s", path, strerror(errno));
+  }
+  if (pid == 0) {
+    close(fds[0]);
+    child_import(fds[1], path, (size_t)st.st_size);
+  }
+  close(fds[1]);
+  int32_t cst = -1;
+  mgs_status status = MGS_OK;
+  mgs_mesh *m = NULL;
+  int got = read_all(fds[0], &cst, sizeof cst);
+  if (got && cst != MGS_OK) {
+    char msg[sizeof err->msg];
+    if (read_all(fds[0], msg, sizeof msg)) {
+      msg[sizeof msg - 1] = 0;
+      status = mgs_error_set(err, (mgs_status)cst, "%s", msg);
+    } else {
+      got = 0;
+    }
+  } else if (got) {
+    uint64_t nv = 0, nt = 0;
+    got = read_all(fds[0], &nv, 8) && read_all(fds[0], &nt, 8) && nv > 0 && nt > 0 && nv <= UINT32_MAX &&
+          nv <= (uint64_t)st.st_size && nt <= (uint64_t)st.st_size * 3; /* each needs bytes in the file */
+    if (got) m = mgs_mesh_create((size_t)nv, (size_t)nt);
+    if (got && !m) status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+    else if (got) got = read_all(fds[0], m->v, sizeof(float) * 3 * m->nv) && read_all(fds[0], m->t, sizeof(uint32_t) * 3 * m->nt);
+  }
+  close(fds[0]);
+  int ws = 0;
+  while (waitpid(pid, &ws, 0) < 0 && errno == EINTR) {
+  }
+  if (status == MGS_OK && (!got || !WIFEXITED(ws) || WEXITSTATUS(ws) != 0)) {
+    if (WIFSIGNALED(ws))
+      status = mgs_error_set(err, MGS_ERR_FORMAT, "%s: cannot read mesh: the importer (assimp) failed on it with signal %d (corrupt file?)",
+                             path, WTERMSIG(ws));
+    else
+      status = mgs_error_set(err, MGS_ERR_FORMAT, "%s: cannot read mesh: the importer (assimp) stopped (corrupt or too large)", path);
+  }
+  if (status == MGS_OK) {
+    for (size_t i = 0; i < m->nt * 3; i++)
+      if (m->t[i] >= m->nv) { status = mgs_error_set(err, MGS_ERR_FORMAT, "%s: triangle %zu has an index out of range", path, i / 3); break; }
+  }
   if (status == MGS_OK && weld(m) != MGS_OK) status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
   if (status != MGS_OK) {
     mgs_mesh_destroy(m);

@@ -40,6 +40,9 @@ int mgs_camera_project(const mgs_camera *cam, const double p[3], double *u, doub
 void mgs_camera_ray(const mgs_camera *cam, double u, double v, double origin[3], double dir[3]);
 /* Scale intrinsics for an image downscaled by an integer factor. */
 void mgs_camera_downscale(mgs_camera *cam, int factor);
+/* Intrinsics for the image resized to w x h with its whole extent kept (fields of view
+ * and the principal point's relative position exact, whatever the ratio). */
+void mgs_camera_resize(mgs_camera *cam, int w, int h);
 double mgs_camera_fovx(const mgs_camera *cam);
 double mgs_camera_fovy(const mgs_camera *cam);
 /* Look-at pose: camera at eye looking at target with world up vector. */

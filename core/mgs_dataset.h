@@ -29,8 +29,13 @@ typedef struct mgs_view {
 
 typedef struct mgs_dataset_options {
   mgs_dataset_format format; /* AUTO detects */
-  int downscale;             /* integer factor >= 1 */
-  int white_background;      /* 1 white (NeRF-synthetic default), 0 black */
+  int downscale;             /* integer factor >= 1: images round(w/f) x round(h/f) (the
+                                reference's --resolution 1|2|4|8); 1 = full size */
+  int max_width;             /* 1600: with downscale 1, wider images are resized to this
+                                width (the reference's cap when no resolution is given);
+                                0 = never. Resampling is PIL's bicubic either way. */
+  int white_background;      /* 1 white, 0 black, -1 by format (default): white for
+                                NeRF-synthetic, black otherwise, as the reference's -w use */
   int load_images;           /* 1: read all images now, in parallel (and check their sizes);
                                 0: only check that each image file exists */
   int test_every;            /* COLMAP / nerfstudio without splits: every Nth view is test (8) */
@@ -45,7 +50,9 @@ typedef struct mgs_dataset {
                                    beside a NeRF-synthetic dataset; NULL if none */
   char *mesh_path;              /* ground-truth mesh if the dataset has one (gt_mesh.ply) */
   float background[3];
+  int white_background;         /* the background chosen (1 white, 0 black) */
   int downscale;                /* factor applied to cameras and images */
+  int max_width;                /* the cap applied (0: none) */
   /* Scene normalization of the reference: centre of the camera centres and the radius
      (1.1 x the largest distance to it) used for learning rates and densification. */
   double center[3];
@@ -54,6 +61,8 @@ typedef struct mgs_dataset {
 
 void mgs_dataset_options_default(mgs_dataset_options *o);
 mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *o, mgs_dataset **out, mgs_error *err);
+/* The training size of an image of full_w x full_h (see downscale and max_width). */
+void mgs_dataset_image_size(int full_w, int full_h, int downscale, int max_width, int *w, int *h);
 /* Loads one view's image if not yet loaded (checks its size against the camera, naming
  * the image on mismatch). Safe to call concurrently for different views. */
 mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err);

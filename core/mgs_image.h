@@ -33,6 +33,11 @@ mgs_status mgs_image_write(const char *path, const mgs_image *img, mgs_error *er
 mgs_image *mgs_image_composite(const mgs_image *rgba, const float bg[3]);
 /* Box-filter downscale by an integer factor (area average). */
 mgs_image *mgs_image_downscale(const mgs_image *img, int factor);
+/* Resize to w x h as PIL's Image.resize(..., BICUBIC) does (what the reference 3DGS uses
+ * for every training image): Keys cubic with a = -0.5, the kernel widened by the scale
+ * when shrinking (antialiased), the full image extent mapped onto the new one, values
+ * clamped to [0, 1] as PIL's 8-bit output is. NULL if w or h < 1 or out of memory. */
+mgs_image *mgs_image_resize_bicubic(const mgs_image *img, int w, int h);
 
 #ifdef __cplusplus
 }

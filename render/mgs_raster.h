@@ -28,6 +28,7 @@
 #ifndef MGS_RASTER_H
 #define MGS_RASTER_H
 #include <stddef.h>
+#include <stdint.h>
 #include "core/mgs_error.h"
 #include "core/mgs_gaussians.h"
 #include "core/mgs_camera.h"
@@ -81,6 +82,14 @@ void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
 mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
                               const mgs_raster_settings *s, mgs_raster_output *out, mgs_error *err);
 
+/* The same forward projecting only the listed Gaussians (idx: strictly increasing
+ * indices < g->n); all others are treated as culled. The result equals
+ * mgs_raster_forward's when every Gaussian the latter keeps is listed:
+ * render/mgs_visibility.h computes such lists from spatial tiles. */
+mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
+                                   const mgs_raster_settings *s, const uint32_t *idx, size_t n_idx,
+                                   mgs_raster_output *out, mgs_error *err);
+
 /* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
  * Gradients are ADDED into `grad` (a model with the same n; its groups are used as
  * gradient arrays of the same shapes). grad_mean2d (n floats, may be NULL) receives the
@@ -103,6 +112,13 @@ typedef void (*mgs_raster_grad_sink)(void *ctx, size_t first, size_t count, cons
 mgs_status mgs_raster_backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
                                     const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                     mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err);
+
+/* The same, calling the sink only for blocks holding a Gaussian with radius > 0 (culled
+ * Gaussians have zero gradients: a consumer that leaves them alone, as sparse Adam, needs
+ * no call; the cost then follows what the view saw). */
+mgs_status mgs_raster_backward_sink_visible(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                            const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                            mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err);
 
 #ifdef __cplusplus
 }

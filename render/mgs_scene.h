@@ -42,6 +42,9 @@ typedef struct mgs_scene_options {
   int allow_open;          /* render meshes with boundary / non-manifold edges */
   const char *mesh_name;   /* named in error messages and scene.json (may be NULL) */
   int quiet;               /* no progress bar */
+  int city_size;           /* > 0: the mesh is mgs_assets_city(city_size): kept in world
+                              units (not normalized) and seen by the city's camera rig
+                              (mgs_scene_city_cameras) instead of the sphere around it */
 } mgs_scene_options;
 
 void mgs_scene_options_default(mgs_scene_options *o);
@@ -72,6 +75,9 @@ mgs_status mgs_scene_check_mesh(const mgs_mesh *mesh, const mgs_scene_options *o
  * looking at the origin from distance `radius` (> 0). Train and test use different
  * spiral offsets, so no test view repeats a training view. */
 void mgs_scene_make_cameras(const mgs_scene_options *o, int split, int n, double radius, mgs_camera *cams);
+/* The city's rig (render/scene_city.c): n cameras of o's size and fov, half at street
+ * level, half low aerial, each seeing a few units of the city of size o->city_size. */
+void mgs_scene_city_cameras(const mgs_scene_options *o, int split, int n, mgs_camera *cams);
 /* The camera distance used for a mesh whose vertices lie within `bound_radius` of the
  * origin: o->radius if set, else the distance at which that sphere fits the view. */
 double mgs_scene_camera_radius(const mgs_scene_options *o, double bound_radius);

@@ -193,6 +193,7 @@ typedef struct sink_run {
   bwd_ctx bc;
   mgs_raster_grad_sink sink;
   void *sink_ctx;
+  int visible_only;  /* skip blocks without a Gaussian of radius > 0 */
 } sink_run;
 
 static void sink_range(void *ctx, size_t bb, size_t be) {
@@ -211,6 +212,11 @@ static void sink_range(void *ctx, size_t bb, size_t be) {
   blk.sh_rest = blk.sh_dc + 3 * SINK_BLOCK;
   for (size_t k = bb; k < be; k++) {
     size_t b = k * SINK_BLOCK, e = b + SINK_BLOCK < r->n ? b + SINK_BLOCK : r->n;
+    if (sc->visible_only) {
+      size_t i = b;
+      while (i < e && r->radii[i] <= 0) i++;
+      if (i == e) continue;
+    }
     blk.n = e - b;
     memset(buf, 0, sizeof buf);
     reduce_span(&sc->bc, b, e, &blk, b);
@@ -255,16 +261,32 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
   return MGS_OK;
 }
 
+static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                mgs_raster_grad_sink sink, void *sink_ctx, int visible_only, mgs_error *err);
+
 mgs_status mgs_raster_backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
                                     const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                     mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err) {
+  return backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, sink, sink_ctx, 0, err);
+}
+
+mgs_status mgs_raster_backward_sink_visible(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                            const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                            mgs_raster_grad_sink sink, void *sink_ctx, mgs_error *err) {
+  return backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, sink, sink_ctx, 1, err);
+}
+
+static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
+                                const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                mgs_raster_grad_sink sink, void *sink_ctx, int visible_only, mgs_error *err) {
   mgs_status st = backward_check(r, dL_dcolor, err);
   if (st != MGS_OK) return st;
   if (!sink || !model) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: NULL argument");
   if (model != r->g || model->n != r->n)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: the model is not the forward's (%zu Gaussians, "
                          "the forward had %zu)", model->n, r->n);
-  sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx};
+  sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx, visible_only};
   backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range, &sc);
   r->have_forward = 0; /* the sink may have changed the model: another backward needs a new forward */
   return MGS_OK;

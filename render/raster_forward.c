@@ -164,8 +164,28 @@ void mgs_raster_render_tiles(mgs_raster *r) {
   r->evals_fwd = ev * 16.0;
 }
 
+static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_raster_settings *s,
+                          const uint32_t *idx, size_t n_idx, mgs_raster_output *out, mgs_error *err);
+
 mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
                               const mgs_raster_settings *s, mgs_raster_output *out, mgs_error *err) {
+  return forward(r, g, cam, s, NULL, 0, out, err);
+}
+
+mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
+                                     const mgs_raster_settings *s, const uint32_t *idx, size_t n_idx,
+                                     mgs_raster_output *out, mgs_error *err) {
+  if (!idx && n_idx) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: NULL index list");
+  for (size_t k = 0; k < n_idx; k++)
+    if (idx[k] >= g->n || (k && idx[k] <= idx[k - 1]))
+      return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: index list entry %zu (%u) not increasing below %zu",
+                           k, idx[k], g->n);
+  static const uint32_t none = 0;
+  return forward(r, g, cam, s, idx ? idx : &none, n_idx, out, err);
+}
+
+static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_raster_settings *s,
+                          const uint32_t *idx, size_t n_idx, mgs_raster_output *out, mgs_error *err) {
   if (!r || !g || !cam || !s || !out)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: NULL argument");
   if (cam->width <= 0 || cam->height <= 0 || cam->width > 32768 || cam->height > 32768)
@@ -191,7 +211,8 @@ mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_c
   mgs_status st = mgs_raster_reserve(r, g->n, nt, npix, err);
   if (st != MGS_OK) return st;
   double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
-  mgs_raster_project_all(r);
+  if (idx) mgs_raster_project_list(r, idx, n_idx);
+  else mgs_raster_project_all(r);
   double t1 = mgs_now(), c1 = mgs_raster_cpu_now();
   st = mgs_raster_bin(r, err);
   if (st != MGS_OK) return st;

@@ -85,6 +85,8 @@ struct mgs_raster {
 
 /* raster_project.c */
 void mgs_raster_project_all(mgs_raster *r);
+/* Only the listed Gaussians (increasing indices); all others culled (radius 0, no tiles). */
+void mgs_raster_project_list(mgs_raster *r, const uint32_t *idx, size_t m);
 void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, float gsum[GS_N][16],
                                    mgs_gaussians *grad, size_t gbase, float *grad_mean2d);
 /* raster_sh.c */

@@ -3,6 +3,7 @@
  * computeCov3D. The world->camera transform is done in double (scenes far from the
  * origin), everything after it in float. */
 #include <math.h>
+#include <string.h>
 #include "core/mgs_math.h"
 #include "core/mgs_parallel.h"
 #include "render/raster_internal.h"
@@ -178,7 +179,11 @@ static void block_vector_part(const proj_ctx *pc, proj_block *pb) {
   v16f_store(pb->radius, radius); v16f_store(pb->op, op);
 }
 
-static void project_block(const proj_ctx *pc, size_t i0, int nl) {
+/* Lanes are Gaussians i0 .. i0+nl-1, or idx[0..nl) (increasing, spread below 2^24: the
+ * SH kernel addresses lanes by 32-bit offsets from the first) when idx is not NULL. */
+#define GI(l) (idx ? (size_t)idx[l] : i0 + (size_t)(l))
+static void project_block(const proj_ctx *pc, size_t i0, int nl, const uint32_t *idx) {
+  if (idx) i0 = idx[0];
   mgs_raster *r = pc->r;
   const mgs_gaussians *g = r->g;
   const mgs_camera *cam = &r->cam;
@@ -189,7 +194,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
      camera centre) */
   double md[3][16], tdl[3][16];
   for (int l = 0; l < 16; l++)
-    for (int k = 0; k < 3; k++) md[k][l] = l < nl ? (double)g->mean[3 * (i0 + (size_t)l) + k] : pc->campos[k];
+    for (int k = 0; k < 3; k++) md[k][l] = l < nl ? (double)g->mean[3 * GI(l) + k] : pc->campos[k];
   for (int h = 0; h < 16; h += 8) {
     v8d m0 = v8d_load(md[0] + h), m1 = v8d_load(md[1] + h), m2 = v8d_load(md[2] + h);
     for (int k = 0; k < 3; k++)
@@ -197,7 +202,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   }
   /* lane setup: early culling, parameters (unused lanes benign) */
   for (int l = 0; l < 16; l++) {
-    size_t i = i0 + (size_t)l;
+    size_t i = GI(l);
     int ok = l < nl;
     double td[3] = {0, 0, 1};
     if (ok) {
@@ -253,11 +258,11 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   }
   for (int l = 0; l < nl; l++) {
     if (!pb.alive[l]) continue;
-    size_t i = i0 + (size_t)l;
+    size_t i = GI(l);
     float det = pb.det[l];
     if (!(det > 0) || !isfinite(det) || !finite[l]) { cull(r, i); continue; }
     if ((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]) == 0) { cull(r, i); continue; }
-    lane[l] = l;
+    lane[l] = (int32_t)(GI(l) - i0);
     shmask |= (uint16_t)(1u << l);
   }
   /* colour from SH, 16 lanes at once */
@@ -268,7 +273,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   (void)lane;
   for (int l = 0; l < nl; l++) {
     if (!(shmask & (1u << l))) continue;
-    size_t i = i0 + (size_t)l;
+    size_t i = GI(l);
     float d3[3] = {dirl[0][l], dirl[1][l], dirl[2][l]}, c3[3];
     mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, d3, c3);
     for (int k = 0; k < 3; k++) rgbl[k][l] = c3[k];
@@ -280,7 +285,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   for (int l = 0; l < 16; l++) r2l[l] = 0;
   for (int l = 0; l < nl; l++) {
     if (!(shmask & (1u << l))) continue;
-    size_t i = i0 + (size_t)l;
+    size_t i = GI(l);
     float op = pb.op[l];
     mgs_proj_aux *ax = &r->aux[i];
     mgs_splat *sp = &r->splat[i];
@@ -325,7 +330,7 @@ static void project_block(const proj_ctx *pc, size_t i0, int nl) {
   }
   for (int l = 0; l < nl; l++) {
     if (!(binmask & (1u << l))) continue;
-    size_t i = i0 + (size_t)l;
+    size_t i = GI(l);
     int x0 = rect[0][l], y0 = rect[1][l], x1 = rect[2][l], y1 = rect[3][l];
     if (brect[0][l] > x0) x0 = brect[0][l];
     if (brect[2][l] < x1) x1 = brect[2][l];
@@ -344,8 +349,40 @@ static void project_range(void *ctx, size_t b, size_t e) {
   const proj_ctx *pc = ctx;
   for (size_t i = b * 16; i < e * 16 && i < pc->r->n; i += 16) {
     size_t left = pc->r->n - i;
-    project_block(pc, i, left < 16 ? (int)left : 16);
+    project_block(pc, i, left < 16 ? (int)left : 16, NULL);
   }
+}
+
+typedef struct list_ctx {
+  proj_ctx pc;
+  const uint32_t *idx;
+  size_t m;
+} list_ctx;
+
+static void project_listed(void *ctx, size_t b, size_t e) {
+  const list_ctx *lc = ctx;
+  for (size_t k = b; k < e; k++) {
+    size_t j = 16 * k, end = j + 16 < lc->m ? j + 16 : lc->m;
+    while (j < end) { /* lanes of one call stay within 2^24 of its first */
+      size_t j1 = j + 1;
+      while (j1 < end && lc->idx[j1] - lc->idx[j] < (1u << 24)) j1++;
+      project_block(&lc->pc, 0, (int)(j1 - j), lc->idx + j);
+      j = j1;
+    }
+  }
+}
+
+void mgs_raster_project_list(mgs_raster *r, const uint32_t *idx, size_t m) {
+  /* every Gaussian not listed is culled, as the projection would have */
+  memset(r->radii, 0, r->n * sizeof *r->radii);
+  memset(r->count, 0, r->n * sizeof *r->count);
+  list_ctx lc;
+  lc.pc.r = r;
+  geom_par_init(r, &lc.pc.gp);
+  mgs_camera_center(&r->cam, lc.pc.campos);
+  lc.idx = idx;
+  lc.m = m;
+  mgs_parallel_for(0, (m + 15) / 16, 4, project_listed, &lc);
 }
 
 void mgs_raster_project_all(mgs_raster *r) {

@@ -224,6 +224,7 @@ static mgs_status write_scene_record(const char *path, const mgs_mesh *m, const 
   cJSON_AddNumberToObject(root, "spp", o->spp);
   cJSON_AddStringToObject(root, "background", o->white_background ? "white" : "black");
   cJSON_AddStringToObject(root, "init", init_names[o->init]);
+  if (o->city_size > 0) cJSON_AddNumberToObject(root, "city_size", o->city_size);
   cJSON *norm = cJSON_AddObjectToObject(root, "normalization");
   cJSON_AddNumberToObject(norm, "scale", scale);
   cJSON_AddItemToObject(norm, "center", cJSON_CreateDoubleArray(center, 3));
@@ -257,7 +258,8 @@ static mgs_status build_into(const char *stage, mgs_mesh *m, const mgs_scene_opt
     char *sub = mgs_path_join(stage, splits[sp]);
     if (!sub) { s = mgs_error_set(err, MGS_ERR_NOMEM, "scene: out of memory"); break; }
     if (counts[sp] > 0) s = mgs_mkdir_p(sub, err);
-    mgs_scene_make_cameras(o, sp, counts[sp], radius, cams);
+    if (o->city_size > 0) mgs_scene_city_cameras(o, sp, counts[sp], cams);
+    else mgs_scene_make_cameras(o, sp, counts[sp], radius, cams);
     for (int i = 0; i < counts[sp] && s == MGS_OK; i++) {
       double t0 = mgs_now();
       st->rays += mgs_scene_render_view(r, &cams[i], o, (uint32_t)(sp * 1000003 + i), img);
@@ -342,7 +344,8 @@ static mgs_status render_dataset(const mgs_mesh *mesh, const mgs_scene_options *
   memcpy(m->v, mesh->v, mesh->nv * 3 * sizeof(float));
   memcpy(m->t, mesh->t, mesh->nt * 3 * sizeof(uint32_t));
   double center[3] = {0, 0, 0};
-  double scale = mgs_mesh_normalize(m, 2.0, center);
+  /* the city keeps its world units (its blocks' size must not depend on its size) */
+  double scale = o->city_size > 0 ? 1.0 : mgs_mesh_normalize(m, 2.0, center);
   st->triangles = m->nt;
 
   char *stage = sibling_path(out_dir, "staging");

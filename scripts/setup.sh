@@ -8,7 +8,7 @@ PKGS=(
   libopenimageio-dev openimageio-tools libembree-dev libtbb-dev
   libassimp-dev libcjson-dev libcairo2-dev libqhull-dev
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
-  libopencv-core-dev python3-pot
+  libopencv-core-dev python3-pot python3-pil
 )
 missing=()
 for p in "${PKGS[@]}"; do

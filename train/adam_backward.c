@@ -16,6 +16,7 @@ typedef struct fused_ctx {
   /* per group: smallest (element << 1 | is_value) that was not finite, UINT64_MAX if none;
    * the report then names what a separate step's scan in element order finds first */
   _Atomic uint64_t first_bad[MGS_PARAM_COUNT];
+  const int *radii;   /* sparse Adam: only rows with radii > 0 are stepped (NULL: all) */
 } fused_ctx;
 
 static void record_bad(fused_ctx *c, int k, uint64_t key) {
@@ -31,30 +32,61 @@ static void adam_sink(void *vctx, size_t first, size_t count, const mgs_gaussian
     gp.p += off; gp.m += off; gp.v += off;
     gp.g = mgs_gaussians_group((mgs_gaussians *)block, (mgs_param_group)c->gid[k]);
     int bad = 0;
-    if (gp.used == row) bad = mgs_adam_span(&gp, 0, count * row);
+    if (c->radii) { /* runs of visible rows */
+      const int *rad = c->radii + first;
+      for (size_t r = 0; r < count;) {
+        if (rad[r] <= 0) { r++; continue; }
+        size_t r1 = r + 1;
+        while (r1 < count && rad[r1] > 0) r1++;
+        if (gp.used == row) bad |= mgs_adam_span(&gp, r * row, r1 * row);
+        else
+          for (size_t q = r; q < r1; q++) bad |= mgs_adam_span(&gp, q * row, q * row + gp.used);
+        r = r1;
+      }
+    } else if (gp.used == row) bad = mgs_adam_span(&gp, 0, count * row);
     else
       for (size_t r = 0; r < count; r++) bad |= mgs_adam_span(&gp, r * row, r * row + gp.used);
     if (!bad) continue;
     for (size_t i = 0; i < count * row; i++) {
-      if (i % row >= gp.used) continue;
+      if (i % row >= gp.used || (c->radii && c->radii[first + i / row] <= 0)) continue;
       if (!isfinite(gp.g[i])) { record_bad(c, k, (uint64_t)(off + i) << 1); break; }
       if (!isfinite(gp.p[i])) { record_bad(c, k, (uint64_t)(off + i) << 1 | 1); break; }
     }
   }
 }
 
+static mgs_status step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                unsigned group_mask, const int *radii, mgs_error *err);
+
 mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                   const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                   unsigned group_mask, mgs_error *err) {
+  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, NULL, err);
+}
+
+mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                         const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                         unsigned group_mask, const int *radii, mgs_error *err) {
+  if (!radii) return mgs_error_set(err, MGS_ERR_ARG, "adam: sparse step without radii");
+  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, radii, err);
+}
+
+static mgs_status step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                unsigned group_mask, const int *radii, mgs_error *err) {
   if (a->n != model->n)
     return mgs_error_set(err, MGS_ERR_ARG, "adam: %zu moments for %zu Gaussians", a->n, model->n);
   fused_ctx c;
   memset(&c, 0, sizeof c);
   for (int k = 0; k < MGS_PARAM_COUNT; k++) atomic_init(&c.first_bad[k], UINT64_MAX);
+  c.radii = radii;
   /* the step counts advance only once the backward has accepted its arguments */
   mgs_adam probe = *a;
   c.n_grp = mgs_adam_prepare(&probe, model, NULL, group_mask, c.grp, c.gid);
-  mgs_status st = mgs_raster_backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err);
+  /* sparse: blocks without a visible Gaussian would be skipped row by row anyway */
+  mgs_status st = radii ? mgs_raster_backward_sink_visible(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err)
+                        : mgs_raster_backward_sink(r, model, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, adam_sink, &c, err);
   if (st != MGS_OK) return st;
   memcpy(a->t, probe.t, sizeof a->t);
   for (int k = 0; k < c.n_grp; k++) {

@@ -3,14 +3,17 @@
  *
  * Layout (little-endian, as the host): "MGSCKPT\0", u32 version, u32 byte-order mark,
  * then the header fields below, the view order, the model's six groups, Adam's first and
- * second moments, the strategy's name (32 bytes) and its blob (u64 size + bytes), and a
- * final u64 FNV-1a checksum of everything before it. */
+ * second moments, the strategy's name (32 bytes) and its blob (u64 size + bytes), the
+ * loss terms (version 2: u32 count, then per term its name (32 bytes) and blob), and a
+ * final u64 FNV-1a checksum of everything before it. Version 1 files (no terms) are read
+ * by runs without loss terms. */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include "train/trainer_internal.h"
 #include "core/mgs_fs.h"
 
-#define CKPT_VERSION 1u
+#define CKPT_VERSION 2u
 static const char CKPT_MAGIC[8] = {'M', 'G', 'S', 'C', 'K', 'P', 'T', 0};
 
 typedef struct {
@@ -29,15 +32,45 @@ static uint64_t fnv(uint64_t h, const void *p, size_t n) {
   return h;
 }
 
-typedef struct { FILE *f; uint64_t h; int ok; } hwriter;
+typedef struct { FILE *f; uint64_t h; int ok, errnum; } hwriter;
 static void hw(hwriter *w, const void *p, size_t n) {
   if (!w->ok || n == 0) return;
   w->h = fnv(w->h, p, n);
   w->ok = fwrite(p, 1, n, w->f) == n;
+  if (!w->ok) w->errnum = errno; /* disk full, file size limit: said in the message */
+}
+
+/* The loss terms' states, serialized into one buffer: u32 count, then per term its name
+ * (32 bytes), u64 size and bytes. */
+static mgs_status terms_blob(const mgs_trainer *t, const char *path, char **out, size_t *out_len, mgs_error *err) {
+  *out = NULL; *out_len = 0;
+  FILE *mf = open_memstream(out, out_len);
+  if (!mf) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: cannot buffer the loss terms' state", path);
+  uint32_t nt = (uint32_t)t->n_terms;
+  int ok = fwrite(&nt, 4, 1, mf) == 1;
+  mgs_status st = MGS_OK;
+  for (size_t k = 0; k < t->n_terms && ok && st == MGS_OK; k++) {
+    const mgs_term *tm = t->terms[k];
+    char name[32] = {0};
+    snprintf(name, sizeof name, "%s", tm->ops->name);
+    char *b = NULL;
+    size_t bl = 0;
+    FILE *tf = open_memstream(&b, &bl);
+    if (!tf) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: cannot buffer the loss terms' state", path); break; }
+    st = tm->ops->save ? tm->ops->save(tm->self, tf, err) : MGS_OK;
+    fclose(tf);
+    uint64_t l = bl;
+    ok = st == MGS_OK && fwrite(name, 1, 32, mf) == 32 && fwrite(&l, 8, 1, mf) == 1 && (bl == 0 || fwrite(b, 1, bl, mf) == bl);
+    free(b);
+  }
+  fclose(mf);
+  if (st == MGS_OK && !ok) st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: cannot buffer the loss terms' state", path);
+  if (st) { free(*out); *out = NULL; }
+  return st;
 }
 
 mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, mgs_error *err) {
-  /* the strategy's state first, into memory */
+  /* the strategy's and the terms' state first, into memory */
   char *blob = NULL;
   size_t blob_len = 0;
   char sname[32] = {0};
@@ -49,11 +82,17 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
     fclose(mf);
     if (st) { free(blob); return st; }
   }
+  char *tblob = NULL;
+  size_t tblob_len = 0;
+  {
+    mgs_status st = terms_blob(t, path, &tblob, &tblob_len, err);
+    if (st) { free(blob); return st; }
+  }
   mgs_atomic_file *af = NULL;
   FILE *f = NULL;
   mgs_status st = mgs_atomic_open(path, &af, &f, err);
-  if (st) { free(blob); return st; }
-  hwriter w = {f, 1469598103934665603ull, 1};
+  if (st) { free(blob); free(tblob); return st; }
+  hwriter w = {f, 1469598103934665603ull, 1, 0};
   uint32_t ver = CKPT_VERSION, bom = 0x01020304u;
   ckpt_header h;
   memset(&h, 0, sizeof h);
@@ -79,11 +118,14 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   hw(&w, &bl, sizeof bl);
   hw(&w, blob, blob_len);
   free(blob);
+  hw(&w, tblob, tblob_len);
+  free(tblob);
   uint64_t sum = w.h;
-  if (w.ok) w.ok = fwrite(&sum, sizeof sum, 1, f) == 1;
+  if (w.ok && !(w.ok = fwrite(&sum, sizeof sum, 1, f) == 1)) w.errnum = errno;
   if (!w.ok) {
-    mgs_atomic_abort(af);
-    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write the checkpoint", path);
+    mgs_atomic_abort(af); /* the previous checkpoint stays in place */
+    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot write the checkpoint (%s); the previous checkpoint is unchanged", path,
+                         w.errnum ? strerror(w.errnum) : "write error");
   }
   return mgs_atomic_commit(af, err);
 }
@@ -113,7 +155,7 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   ckpt_header h;
   if (!rd(&r, &ver, 4) || !rd(&r, &bom, 4)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   if (bom != 0x01020304u) FAIL(MGS_ERR_FORMAT, "%s: checkpoint written on a machine of another byte order", path);
-  if (ver != CKPT_VERSION) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
+  if (ver != CKPT_VERSION && !(ver == 1u && t->n_terms == 0)) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
   if (!rd(&r, &h, sizeof h)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   if (h.perm_len != t->perm_len || h.perm_pos > h.perm_len)
     FAIL(MGS_ERR_FORMAT, "%s: checkpoint has %llu training views, the dataset %zu", path, (unsigned long long)h.perm_len, t->perm_len);
@@ -157,6 +199,27 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
     if (mf) fclose(mf);
     if (st) { free(perm); free(data); return st; }
   }
+  r.p += bl; r.left -= (size_t)bl;
+  if (ver >= 2u) {
+    uint32_t nt = 0;
+    if (!rd(&r, &nt, 4)) { free(perm); FAIL(MGS_ERR_FORMAT, "%s: checkpoint truncated (loss terms)", path); }
+    if (nt != t->n_terms) { free(perm); FAIL(MGS_ERR_ARG, "%s: checkpoint was made with %u loss terms, this run has %zu", path, nt, t->n_terms); }
+    for (size_t k = 0; k < t->n_terms; k++) {
+      char name[32];
+      uint64_t l = 0;
+      if (!rd(&r, name, 32) || !rd(&r, &l, 8) || l > r.left) { free(perm); FAIL(MGS_ERR_FORMAT, "%s: checkpoint truncated (loss terms)", path); }
+      name[31] = 0;
+      mgs_term *tm = t->terms[k];
+      if (strcmp(name, tm->ops->name)) { free(perm); FAIL(MGS_ERR_ARG, "%s: checkpoint loss term %zu is '%s', this run's is '%s'", path, k + 1, name, tm->ops->name); }
+      if (tm->ops->load) {
+        FILE *mf = l ? fmemopen((void *)r.p, (size_t)l, "rb") : NULL;
+        st = mf ? tm->ops->load(tm->self, mf, err) : mgs_error_set(err, MGS_ERR_FORMAT, "%s: checkpoint has no state for loss term '%s'", path, name);
+        if (mf) fclose(mf);
+        if (st) { free(perm); free(data); return st; }
+      }
+      r.p += l; r.left -= (size_t)l;
+    }
+  }
   memcpy(t->perm, perm, t->perm_len * sizeof(uint32_t));
   free(perm);
   t->perm_pos = (size_t)h.perm_pos;
@@ -166,6 +229,7 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   t->seconds = h.seconds; t->ema_loss = h.ema_loss; t->ema_psnr = h.ema_psnr;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) t->adam->t[k] = h.adam_t[k];
   free(data);
+  mgs_trainer_scale_invalidate(t); /* the tiles bound the old model */
   st = mgs_gaussians_check_finite(t->g, err);
   return st;
 #undef FAIL

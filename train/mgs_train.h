@@ -5,7 +5,8 @@
  *   initial Gaussians (points or random) .......... mgs_init_* (train/init.c)
  *   the trainer loop, checkpoints, Ctrl-C ......... mgs_trainer_* (train/trainer.c,
  *                                                   train/checkpoint.c)
- *   the run folder (cameras.json, cfg_args) ....... mgs_run_* (train/run_io.c)
+ *   the run folder (cameras.json, cfg_args) ....... mgs_run_* (train/run_io.c,
+ *                                                   one trainer per folder: run_lock.c)
  * Density-control strategies plug in through train/mgs_strategy.h.
  *
  * Steps are counted as the reference 3DGS does: iteration 1 is the first, learning rates
@@ -70,6 +71,15 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
 mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                   const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                   unsigned group_mask, mgs_error *err);
+/* Sparse Adam (train/adam_sparse.c), a deliberate difference from the reference, which
+ * steps every Gaussian: only rows with radii[i] > 0 (the Gaussians the last view saw) are
+ * stepped; the others keep parameters and moments unchanged. Otherwise as
+ * mgs_adam_step_zero / mgs_adam_step_backward. */
+mgs_status mgs_adam_step_sparse(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad, unsigned group_mask,
+                                const int *radii, int zero_grad, mgs_error *err);
+mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                         const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                         unsigned group_mask, const int *radii, mgs_error *err);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);
@@ -117,6 +127,8 @@ typedef struct mgs_train_options {
   int sh_every;              /* raise the active degree every N iterations, 1000 */
   float lambda_dssim;        /* 0.2 */
   double lr_mean_init, lr_mean_final; /* 1.6e-4, 1.6e-6, times the scene extent */
+  int lr_mean_max_steps;     /* 30000: the decay's length, whatever `iterations` is (the
+                                reference's position_lr_max_steps); 0 = `iterations` */
   float lr_log_scale, lr_rot, lr_opacity, lr_sh_dc, lr_sh_rest;
   uint64_t seed;
   int checkpoint_every;      /* 0 = never (besides Ctrl-C) */
@@ -125,34 +137,73 @@ typedef struct mgs_train_options {
   int freeze;                /* 1: never update parameters (calibration of tests) */
   int progress;              /* 1: draw the progress bar */
   mgs_adc_options adc;
+  /* large scenes (train/trainer_scale.c); all off by default */
+  int visibility;            /* 1: project only the spatial tiles a view can see (same images);
+                                -1 auto: on when views see under half the initial model */
+  double vis_tile;           /* tile side in world units, 0 = automatic */
+  int vis_rebin_every;       /* re-bin the tiles every N iterations (200; 0 = only on count changes) */
+  int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the
+                                reference); -1 auto: as the visibility's auto decision */
+  size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
+                                MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
+                                images loaded as floats up front */
+  int prefetch;              /* views decoded ahead by the cache's thread (8; 0 = no thread) */
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 
 typedef struct mgs_trainer mgs_trainer;
 struct mgs_strategy;
+struct mgs_term;
 
 /* Takes ownership of `init` (the initial model) and `strategy` (may be NULL: no density
- * control). The dataset is borrowed and must have its train images loaded. */
+ * control). The dataset is borrowed and must have its train images loaded.
+ *
+ * Save points. The reference saves, evaluates and reports "iteration N" after iteration
+ * N's backward and before its densification, opacity reset and optimizer step: the model
+ * it writes is the one iteration N-1 left. This trainer decides that once, here:
+ * mgs_trainer_run_to(t, N) stops at that point (iterations 1..N-1 complete), and
+ * mgs_trainer_model_iteration() names the current model as the reference would. The last
+ * iteration has neither optimizer step nor density control (as the reference, whose final
+ * densification would only change a model it never saves), so after a whole run the model
+ * is the reference's final one. Periodic checkpoints are taken after a whole iteration,
+ * which is where --resume continues exactly. */
 mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,
                               struct mgs_strategy *strategy, mgs_trainer **out, mgs_error *err);
 void mgs_trainer_destroy(mgs_trainer *t);
+/* Adds a loss term (train/mgs_term.h); the trainer owns it (destroyed on failure too).
+ * Terms run in the order added; their state is part of checkpoints. */
+mgs_status mgs_trainer_add_term(mgs_trainer *t, struct mgs_term *term, mgs_error *err);
+/* The last iteration's weighted value of each term (in the order added); n_out <= count. */
+size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out);
 /* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */
 mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err);
 /* Steps until `iterations`, drawing progress, writing periodic checkpoints, checking the
  * stop flag (then writes a checkpoint and returns MGS_ERR_INTERRUPTED). */
 mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err);
-/* The same, stopping after iteration `until` (for saves and evaluations on the way). */
+/* The same, stopping after iteration `until` is complete. */
 mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err);
+/* Runs to the save point of iteration n (see above; n = iterations runs the whole run). */
+mgs_status mgs_trainer_run_to(mgs_trainer *t, int n, mgs_error *err);
 int mgs_trainer_iteration(const mgs_trainer *t);  /* iterations completed */
+/* The iteration the reference would name the current model by: iterations completed + 1,
+ * or the total once the last iteration ran. */
+int mgs_trainer_model_iteration(const mgs_trainer *t);
 int mgs_trainer_active_sh(const mgs_trainer *t);
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
+/* The learning rate the last iteration used for a parameter group. */
+double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group);
 /* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam (in 2
- * on iterations where the two run fused). */
-#define MGS_TRAIN_PHASES 5
+ * on iterations where the two run fused), 5 loss terms (train/mgs_term.h). */
+#define MGS_TRAIN_PHASES 6
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
+/* Image-cache figures (zeros without a cache): hits, misses, peak resident bytes. */
+void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *misses, size_t *peak_bytes);
+/* Visibility figures: Gaussians projected per iteration (mean so far), occupied tiles,
+ * tile side (0s when visibility is off). */
+void mgs_trainer_visibility_stats(const mgs_trainer *t, double *listed_per_iter, size_t *tiles, double *tile_size);
 /* Mean PSNR and SSIM over a split's views (images loaded on demand). */
 mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views,
                                 double *psnr, double *ssim, mgs_error *err);
@@ -172,6 +223,13 @@ mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs
 mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
 /* Largest N with RUN/point_cloud/iteration_N/point_cloud.ply, or -1. */
 int mgs_run_latest_iteration(const char *run_dir);
+/* One trainer per run folder (train/run_lock.c): creates RUN if needed and takes an
+ * exclusive lock on RUN/.morsegs-train.lock; fails with a message naming RUN (and the
+ * holder's pid) when another trainer holds it. The kernel releases it if the process dies;
+ * release removes the file. While held, temp files left by killed trainers are removed. */
+typedef struct mgs_run_lock mgs_run_lock;
+mgs_status mgs_run_lock_acquire(const char *run_dir, mgs_run_lock **out, mgs_error *err);
+void mgs_run_lock_release(mgs_run_lock *l); /* NULL is fine */
 
 /* Opens a run for render/eval: reads cfg_args (source_path, downscale, background,
  * test_every), loads the dataset (images only if load_images) and the .ply of

@@ -217,6 +217,9 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
   o.downscale = ds_s ? atoi(ds_s) : 1;
   if (o.downscale < 1) o.downscale = 1;
   if (wb) o.white_background = !strcmp(wb, "True");
+  /* runs recorded before the 1600 px cap existed trained at full size */
+  const char *mw = mgs_settings_get(&s, "max_width");
+  o.max_width = mw && atoi(mw) > 0 ? atoi(mw) : 0;
   if (te && atoi(te) > 0) o.test_every = atoi(te);
   o.load_images = load_images;
   int it = iteration >= 0 ? iteration : mgs_run_latest_iteration(run_dir);

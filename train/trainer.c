@@ -17,6 +17,7 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->lambda_dssim = 0.2f;
   o->lr_mean_init = 1.6e-4;
   o->lr_mean_final = 1.6e-6;
+  o->lr_mean_max_steps = 30000;
   o->lr_log_scale = 5e-3f;
   o->lr_rot = 1e-3f;
   o->lr_opacity = 0.05f;
@@ -25,6 +26,8 @@ void mgs_train_options_default(mgs_train_options *o) {
   o->seed = 0;
   o->checkpoint_every = 0;
   o->progress = 0;
+  o->vis_rebin_every = 200;
+  o->prefetch = 8;
   mgs_adc_options_default(&o->adc);
 }
 
@@ -71,6 +74,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
     mgs_trainer_destroy(t);
     return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
   }
+  if ((st = mgs_trainer_scale_init(t, err))) { mgs_trainer_destroy(t); return st; }
   double ext = ds->extent > 0 ? ds->extent : 1.0;
   t->adam->lr[MGS_PARAM_MEAN] = (float)(o->lr_mean_init * ext);
   t->adam->lr[MGS_PARAM_LOG_SCALE] = o->lr_log_scale;
@@ -82,7 +86,8 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   memcpy(t->rs.background, ds->background, sizeof t->rs.background);
   mgs_rng_init(&t->rng, o->seed, 0x7261696eu);
   shuffle(t);
-  for (size_t i = 0; i < t->perm_len && st == MGS_OK; i++) {
+  /* with an image cache (train/trainer_scale.c) images are decoded on demand instead */
+  for (size_t i = 0; i < t->perm_len && st == MGS_OK && !o->image_cache_mb; i++) {
     mgs_view *v = &ds->views[MGS_SPLIT_TRAIN][i];
     if (!v->image) st = mgs_dataset_load_image(ds, v, err);
     if (st == MGS_OK && (v->image->channels != 3 || v->image->width != v->cam.width || v->image->height != v->cam.height))
@@ -100,18 +105,43 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   mgs_gaussians_destroy(t->grad);
   mgs_adam_destroy(t->adam);
   mgs_strategy_destroy(t->strategy);
+  for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
+  free(t->terms); free(t->term_values);
   mgs_raster_destroy(t->raster);
+  mgs_trainer_scale_destroy(t);
   mgs_progress_destroy(t->progress);
   free(t->perm); free(t->dl); free(t->gm2d);
   free(t);
 }
 
+mgs_status mgs_trainer_add_term(mgs_trainer *t, mgs_term *term, mgs_error *err) {
+  if (!term) return mgs_error_set(err, MGS_ERR_ARG, "trainer: no loss term given");
+  mgs_term **tt = realloc(t->terms, (t->n_terms + 1) * sizeof *tt);
+  double *tv = tt ? realloc(t->term_values, (t->n_terms + 1) * sizeof *tv) : NULL;
+  if (tt) t->terms = tt;
+  if (tv) t->term_values = tv;
+  if (!tt || !tv) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
+  t->terms[t->n_terms] = term;
+  t->term_values[t->n_terms++] = 0;
+  return MGS_OK;
+}
+
+size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out) {
+  size_t n = t->n_terms < n_out ? t->n_terms : n_out;
+  if (n) memcpy(out, t->term_values, n * sizeof *out);
+  return t->n_terms;
+}
+
 int mgs_trainer_iteration(const mgs_trainer *t) { return t->iteration; }
+int mgs_trainer_model_iteration(const mgs_trainer *t) {
+  return t->iteration >= t->o.iterations ? t->o.iterations : t->iteration + 1;
+}
 int mgs_trainer_active_sh(const mgs_trainer *t) { return t->active_sh; }
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
 double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
 double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
+double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group) { return t->adam->lr[group]; }
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]) {
   memcpy(out, t->phase_s, sizeof t->phase_s);
 }
@@ -161,15 +191,18 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   int it = t->iteration + 1;
   double t0 = mgs_now();
   double ext = t->ds->extent > 0 ? t->ds->extent : 1.0;
-  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, o->iterations);
+  int64_t lr_steps = o->lr_mean_max_steps > 0 ? o->lr_mean_max_steps : o->iterations;
+  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, lr_steps);
   if (o->sh_every > 0 && it % o->sh_every == 0 && t->active_sh < o->sh_degree) t->active_sh++;
   t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
 
   if (t->perm_pos >= t->perm_len) shuffle(t);
-  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][t->perm[t->perm_pos++]];
+  size_t view_index = t->perm[t->perm_pos++];
+  mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][view_index];
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
-  mgs_status st = mgs_raster_forward(t->raster, t->g, &v->cam, &t->rs, &ro, err);
+  t->raster_n = t->g->n;
+  mgs_status st = mgs_trainer_scale_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();
   t->phase_s[0] += t1 - t0;
@@ -177,7 +210,8 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if ((st = grow_floats(&t->dl, &t->dl_cap, np, err))) return st;
   memset(t->dl, 0, np * sizeof(float));
   const float lam = o->lambda_dssim;
-  const float *gt = v->image->data;
+  const float *gt = NULL;
+  if ((st = mgs_trainer_scale_image(t, view_index, &gt, err))) return st;
   double l1 = mgs_loss_l1(ro.color, gt, ro.width, ro.height, 3, 1.0f - lam, t->dl);
   double ssim = mgs_ssim(ro.color, gt, ro.width, ro.height, 3, -lam, t->dl);
   double loss = (1.0 - lam) * l1 + lam * (1.0 - ssim);
@@ -193,27 +227,75 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   ss.iteration = it; ss.model = t->g; ss.adam = t->adam;
   ss.grad_mean2d = t->gm2d; ss.radii = ro.radii; ss.width = ro.width; ss.height = ro.height;
   ss.extent = ext; ss.rng = &t->rng;
-  int use_strategy = t->strategy && !o->freeze;
-  const unsigned all = (1u << MGS_PARAM_COUNT) - 1;
   /* the reference does no optimizer step on the last iteration, and none on tensors the
-     strategy replaced in this one; when the strategy's hook needs neither the gradients nor
-     the unstepped model, the backward and the Adam step run fused (identical results) */
+     strategy replaced in this one; its last densification would change a model it never
+     saves, so the last iteration runs neither (see mgs_trainer_run_to) */
   int step_opt = it < o->iterations && !o->freeze;
-  int fused = step_opt && (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
-  if (!fused) {
+  int use_strategy = t->strategy && !o->freeze && it < o->iterations;
+  const unsigned all = (1u << MGS_PARAM_COUNT) - 1;
+  unsigned term_hooks = 0;
+  mgs_term_step ts;
+  memset(&ts, 0, sizeof ts);
+  if (step_opt) {
+    for (size_t k = 0; k < t->n_terms; k++) {
+      t->term_values[k] = 0;
+      if (t->terms[k]->ops->active) term_hooks |= t->terms[k]->ops->active(t->terms[k]->self, it);
+    }
+    ts.iteration = it; ts.iterations = o->iterations; ts.model = t->g; ts.view = v;
+    ts.view_index = t->perm[t->perm_pos - 1]; ts.color = ro.color; ts.gt = gt;
+    ts.width = ro.width; ts.height = ro.height; ts.active_sh = t->active_sh; ts.extent = ext;
+    ts.rng = &t->rng; ts.dl_dcolor = t->dl;
+  }
+  /* when neither the strategy's hook nor a loss term needs the gradients or the unstepped
+     model, the backward and the Adam step run fused (identical results) */
+  int fused = step_opt && !(term_hooks & MGS_TERM_MODEL) &&
+              (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
+  if (!fused && step_opt) {
     if ((st = zero_grad(t, err))) return st;
     ss.grad = t->grad;
   }
   double t2 = mgs_now();
   t->phase_s[1] += t2 - t1;
+  if (term_hooks & MGS_TERM_IMAGE) {
+    for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
+      mgs_term *tm = t->terms[k];
+      if (!tm->ops->image_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_IMAGE)) continue;
+      ts.value = 0;
+      st = tm->ops->image_grad(tm->self, &ts, err);
+      t->term_values[k] += ts.value;
+    }
+    if (st) return st;
+    double t2b = mgs_now();
+    t->phase_s[5] += t2b - t2;
+    t2 = t2b;
+  }
+  if (!step_opt && !use_strategy) { /* nothing reads a gradient in this iteration */
+    t->iteration = it;
+    t->seconds += mgs_now() - t0;
+    return MGS_OK;
+  }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if (fused) st = mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, err);
+  if (fused) st = mgs_trainer_scale_adam_fused(t, ro.radii, all, err);
   else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
   double t3 = mgs_now();
   t->phase_s[2] += t3 - t2;
+  if (term_hooks & MGS_TERM_MODEL) {
+    ts.grad = t->grad;
+    for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
+      mgs_term *tm = t->terms[k];
+      if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
+      ts.value = 0;
+      st = tm->ops->model_grad(tm->self, &ts, err);
+      t->term_values[k] += ts.value;
+    }
+    if (st) return st;
+    double t3b = mgs_now();
+    t->phase_s[5] += t3b - t3;
+    t3 = t3b;
+  }
   if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
     return st;
   double t4 = mgs_now();
@@ -221,7 +303,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   unsigned mask = all & ~ss.replaced_groups;
   if (step_opt && !fused && mask && t->g->n == t->grad->n) {
     int whole = mask == all;
-    st = mgs_adam_step_zero(t->adam, t->g, t->grad, mask, whole, err);
+    st = mgs_trainer_scale_adam(t, ro.radii, mask, whole, err);
     if (st == MGS_OK && whole) {
       t->grad_clean = 1;
       t->grad_clean_n = t->g->n;
@@ -230,6 +312,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
     if (st) return st;
   }
+  mgs_trainer_scale_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
   t->iteration = it;
   double t5 = mgs_now();
   t->phase_s[4] += t5 - t4;
@@ -239,6 +322,10 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
 
 mgs_status mgs_trainer_run(mgs_trainer *t, mgs_error *err) {
   return mgs_trainer_run_until(t, t->o.iterations, err);
+}
+
+mgs_status mgs_trainer_run_to(mgs_trainer *t, int n, mgs_error *err) {
+  return mgs_trainer_run_until(t, n >= t->o.iterations ? t->o.iterations : n - 1, err);
 }
 
 mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err) {

@@ -3,6 +3,7 @@
 #define MGS_TRAINER_INTERNAL_H
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "train/mgs_term.h"
 #include "render/mgs_raster.h"
 #include "core/mgs_log.h"
 
@@ -12,6 +13,9 @@ struct mgs_trainer {
   mgs_gaussians *g, *grad;
   mgs_adam *adam;
   mgs_strategy *strategy;       /* owned, may be NULL */
+  mgs_term **terms;             /* owned loss terms, in the order added */
+  double *term_values;          /* each term's last weighted value */
+  size_t n_terms;
   mgs_raster *raster;
   mgs_raster_settings rs;
   int iteration;                /* completed */
@@ -31,5 +35,24 @@ struct mgs_trainer {
   double last_loss;
   double phase_s[MGS_TRAIN_PHASES]; /* seconds per phase, see mgs_trainer_phase_seconds */
   struct mgs_progress *progress; /* drawn across run_until calls */
+  /* large scenes (train/trainer_scale.c) */
+  struct mgs_visibility *vis;   /* NULL unless o.visibility */
+  size_t raster_n;              /* model count at this iteration's forward */
+  size_t vis_listed;            /* Gaussians projected, summed over iterations */
+  struct mgs_image_cache *cache; /* NULL unless o.image_cache_mb */
+  float *gt_buf;                /* the current view's image from the cache */
+  size_t gt_cap;
 };
+
+/* train/trainer_scale.c: the large-scene paths (visibility, sparse Adam) */
+mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err);
+void mgs_trainer_scale_destroy(mgs_trainer *t);
+void mgs_trainer_scale_invalidate(mgs_trainer *t); /* the model was replaced (checkpoint) */
+mgs_status mgs_trainer_scale_forward(mgs_trainer *t, const mgs_camera *cam, mgs_raster_output *ro, mgs_error *err);
+mgs_status mgs_trainer_scale_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err);
+mgs_status mgs_trainer_scale_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err);
+/* The ground truth of train view i: the dataset's float image, or the cache's (then the
+ * next views are handed to its prefetch thread). */
+mgs_status mgs_trainer_scale_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err);
+void mgs_trainer_scale_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped);
 #endif

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <vector>
 #include "vdb/vdb_internal.hpp"
+#include "vdb/vdb_read.hpp"
 
 using namespace openvdb;
 
@@ -68,17 +69,17 @@ extern "C" mgs_status mgs_vdb_read_critical(const char *path, const char *name, 
   const std::string gname = name ? name : "critical";
   mgs_vdb_detail::init();
   points::PointDataGrid::Ptr grid;
-  try {
-    io::File f(path);
-    f.open(false);
-    if (!f.hasGrid(gname)) {
-      f.close();
-      return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no grid named '%s'", path, gname.c_str());
-    }
-    grid = gridPtrCast<points::PointDataGrid>(f.readGrid(gname));
-    f.close();
-  } catch (const std::exception &e) {
-    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: cannot read point grid '%s': %s", path, gname.c_str(), e.what());
+  {
+    mgs_vdb_detail::vdb_index idx;
+    mgs_status st = mgs_vdb_detail::check_vdb(path, &idx, err);
+    if (st != MGS_OK) return st;
+    int which = -1;
+    for (size_t i = 0; i < idx.names.size() && which < 0; i++)
+      if (idx.names[i] == gname) which = (int)i;
+    if (which < 0) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no grid named '%s'", path, gname.c_str());
+    GridBase::Ptr base;
+    if ((st = mgs_vdb_detail::load_vdb(idx, which, nullptr, &base, err)) != MGS_OK) return st;
+    grid = gridPtrCast<points::PointDataGrid>(base);
   }
   if (!grid) return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: grid '%s' is not a point grid", path, gname.c_str());
   const Index64 count = points::pointCount(grid->tree());

@@ -1,6 +1,7 @@
 // .vdb files: several grids + file metadata (tool, version, τ, voxel size, source),
-// written atomically (temp file beside the target + rename); reading with one-line errors
-// for a missing file, a non-.vdb file, a missing grid and a non-float grid.
+// written atomically (temp file beside the target + rename); reading (validated first, see
+// vdb_read.hpp) with one-line errors for a missing, truncated or corrupt file, a missing
+// grid, a non-float grid and an unusable transform.
 #include <openvdb/io/File.h>
 #include <sys/stat.h>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <string>
 #include "core/mgs_fs.h"
 #include "vdb/vdb_internal.hpp"
+#include "vdb/vdb_read.hpp"
 
 using namespace openvdb;
 
@@ -57,53 +59,36 @@ extern "C" mgs_status mgs_vdb_write(const char *path, const mgs_vdb_grid *const 
   return MGS_OK;
 }
 
-namespace {
-mgs_status open_file(const char *path, io::File &f, mgs_error *err) {
-  struct stat st;
-  if (stat(path, &st) != 0) return mgs_error_set(err, MGS_ERR_IO, "%s: no such file", path);
-  if (S_ISDIR(st.st_mode)) return mgs_error_set(err, MGS_ERR_IO, "%s: is a directory, not a .vdb file", path);
-  try {
-    f.open(false);  // read everything now: leaf views need in-core buffers
-  } catch (const std::exception &e) {
-    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a readable .vdb file (%s)", path, e.what());
-  }
-  return MGS_OK;
-}
-}  // namespace
-
 extern "C" mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_vdb_grid **out, mgs_error *err) {
   *out = nullptr;
-  mgs_vdb_detail::init();
-  io::File f(path);
-  mgs_status st = open_file(path, f, err);
+  mgs_vdb_detail::vdb_index idx;
+  mgs_status st = mgs_vdb_detail::check_vdb(path, &idx, err);
   if (st != MGS_OK) return st;
+  const std::string float_type = FloatGrid::gridType();
+  int which = -1;
+  if (name) {
+    for (size_t i = 0; i < idx.names.size() && which < 0; i++)
+      if (idx.names[i] == name) which = (int)i;
+    if (which < 0)
+      return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no grid named '%s' (grids: %s)", path, name, mgs_vdb_detail::grid_list(idx).c_str());
+  } else {
+    const std::string level_set = GridBase::gridClassToString(GRID_LEVEL_SET);
+    for (size_t i = 0; i < idx.names.size() && which < 0; i++)
+      if (idx.types[i] == float_type && idx.classes[i] == level_set) which = (int)i;
+    for (size_t i = 0; i < idx.names.size() && which < 0; i++)
+      if (idx.types[i] == float_type) which = (int)i;
+    if (which < 0)
+      return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: no float grid in the file (grids: %s)", path, mgs_vdb_detail::grid_list(idx).c_str());
+  }
+  const std::string &chosen = idx.names[(size_t)which];
+  if (idx.types[(size_t)which] != float_type)  // refused before OpenVDB reads a tree of another type
+    return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: grid '%s' holds %s values, not float (a scalar float grid is needed)",
+                         path, chosen.c_str(), idx.types[(size_t)which].c_str());
+  GridBase::Ptr base;
+  if ((st = mgs_vdb_detail::load_vdb(idx, which, nullptr, &base, err)) != MGS_OK) return st;
+  idx.bytes.clear();
+  idx.bytes.shrink_to_fit();
   try {
-    std::string chosen, names;
-    auto metas = f.readAllGridMetadata();
-    for (auto &g : *metas) {
-      names += (names.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ")";
-    }
-    if (name) {
-      if (!f.hasGrid(name)) {
-        f.close();
-        return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no grid named '%s' (grids: %s)", path, name,
-                             names.empty() ? "none" : names.c_str());
-      }
-      chosen = name;
-    } else {
-      for (auto &g : *metas)
-        if (g->isType<FloatGrid>() && g->getGridClass() == GRID_LEVEL_SET) { chosen = g->getName(); break; }
-      if (chosen.empty())
-        for (auto &g : *metas)
-          if (g->isType<FloatGrid>()) { chosen = g->getName(); break; }
-      if (chosen.empty()) {
-        f.close();
-        return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: no float grid in the file (grids: %s)", path,
-                             names.empty() ? "none" : names.c_str());
-      }
-    }
-    GridBase::Ptr base = f.readGrid(chosen);
-    f.close();
     FloatGrid::Ptr g = gridPtrCast<FloatGrid>(base);
     if (!g)
       return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: grid '%s' holds %s values, not float (a scalar float grid is needed)",
@@ -111,6 +96,13 @@ extern "C" mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_
     if (!g->transform().isLinear() || !g->hasUniformVoxels())
       return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: grid '%s' has a non-uniform or non-linear transform", path,
                            chosen.c_str());
+    const Vec3d vs = g->voxelSize();
+    const Vec3d t = g->transform().indexToWorld(Vec3d(0, 0, 0));
+    if (!(vs[0] > 0) || !std::isfinite(vs[0]) || !std::isfinite(t[0]) || !std::isfinite(t[1]) || !std::isfinite(t[2]))
+      return mgs_error_set(err, MGS_ERR_FORMAT, "%s: grid '%s' has voxel size %g and origin (%g, %g, %g): not a usable transform",
+                           path, chosen.c_str(), vs[0], t[0], t[1], t[2]);
+    if (!std::isfinite(g->background()))
+      return mgs_error_set(err, MGS_ERR_FORMAT, "%s: grid '%s' has a non-finite background value", path, chosen.c_str());
     *out = mgs_vdb_detail::wrap(g);
   } catch (const std::exception &e) {
     return mgs_error_set(err, MGS_ERR_FORMAT, "%s: cannot read grid: %s", path, e.what());
@@ -121,13 +113,12 @@ extern "C" mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_
 extern "C" mgs_status mgs_vdb_read_meta(const char *path, mgs_vdb_file_meta *meta, mgs_error *err) {
   mgs_vdb_file_meta_default(meta);
   meta->tool[0] = meta->version[0] = 0;
-  mgs_vdb_detail::init();
-  io::File f(path);
-  mgs_status st = open_file(path, f, err);
+  mgs_vdb_detail::vdb_index idx;
+  mgs_status st = mgs_vdb_detail::check_vdb(path, &idx, err);
   if (st != MGS_OK) return st;
+  MetaMap::Ptr mm;
+  if ((st = mgs_vdb_detail::load_vdb(idx, -1, &mm, nullptr, err)) != MGS_OK) return st;
   try {
-    MetaMap::Ptr mm = f.getMetadata();
-    f.close();
     if (auto m = mm->getMetadata<StringMetadata>("tool")) std::snprintf(meta->tool, sizeof meta->tool, "%s", m->value().c_str());
     if (auto m = mm->getMetadata<StringMetadata>("version")) std::snprintf(meta->version, sizeof meta->version, "%s", m->value().c_str());
     if (auto m = mm->getMetadata<StringMetadata>("source")) std::snprintf(meta->source, sizeof meta->source, "%s", m->value().c_str());

@@ -1,3 +1,4 @@
+#include <math.h>
 /* Dataset loaders: NeRF-synthetic, nerfstudio and COLMAP (bin and txt) datasets written
  * by the test itself load with the right cameras (a known 3D point projects to the
  * hand-computed pixel), and bad input fails with a message naming the file. */
@@ -82,6 +83,7 @@ static void test_nerf_synthetic(void) {
   CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
   if (!d) return;
   CHECK(d->format == MGS_DATASET_NERF_SYNTHETIC);
+  CHECK(d->white_background == 1 && d->background[0] == 1.0f); /* the reference's -w for these */
   CHECK(d->n_views[MGS_SPLIT_TRAIN] == 2 && d->n_views[MGS_SPLIT_VAL] == 0 && d->n_views[MGS_SPLIT_TEST] == 1);
   mgs_view *v0 = &d->views[MGS_SPLIT_TRAIN][0], *v1 = &d->views[MGS_SPLIT_TRAIN][1];
   CHECK(strcmp(v0->name, "r_0") == 0 && strcmp(v1->name, "r_1") == 0);
@@ -124,13 +126,60 @@ static void test_nerf_synthetic(void) {
   check_project(&v0->cam, 0.5, 0.25, 0, 5, 2.5);
   CHECK(v0->image && v0->image->width == 8 && v0->image->height == 6);
   if (v0->image) {
-    /* output (1, 2) averages input x 2..3, y 4..5 composited on black */
-    double s = 0;
-    for (int y = 4; y < 6; y++)
-      for (int x = 2; x < 4; x++) s += io_png_value(x, y, 1) * io_png_value(x, y, 3);
-    CHECK_NEAR(v0->image->data[(2 * 8 + 1) * 3 + 1], s / 4, 1e-6);
+    /* composited on black first, then PIL's bicubic resize (checked against PIL itself in
+       test_io_resize) */
+    mgs_image *full = mgs_image_create(16, 12, 3);
+    for (int y = 0; y < 12; y++)
+      for (int x = 0; x < 16; x++)
+        for (int c = 0; c < 3; c++) full->data[(y * 16 + x) * 3 + c] = (float)(io_png_value(x, y, c) * io_png_value(x, y, 3));
+    mgs_image *want = mgs_image_resize_bicubic(full, 8, 6);
+    double maxd = 0;
+    for (int i = 0; i < 8 * 6 * 3; i++) maxd = fmax(maxd, fabs(v0->image->data[i] - want->data[i]));
+    CHECK(maxd < 1e-6);
+    mgs_image_destroy(full);
+    mgs_image_destroy(want);
   }
   mgs_dataset_destroy(d);
+
+  /* the reference's width cap (1600 px; here 10 to keep the test small): 16x12 -> 10 x
+     int(12 / 1.6) = 7, focal lengths and principal point scaled per axis, so a world point
+     lands on the same relative position */
+  o.downscale = 1;
+  o.max_width = 10;
+  d = NULL;
+  CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+  if (d) {
+    v0 = &d->views[MGS_SPLIT_TRAIN][0];
+    CHECK(v0->cam.width == 10 && v0->cam.height == 7);
+    CHECK_NEAR(v0->cam.fx, 16 * 10.0 / 16, 1e-12);
+    CHECK_NEAR(v0->cam.fy, 16 * 7.0 / 12, 1e-12);
+    CHECK_NEAR(v0->cam.cx, 8 * 10.0 / 16, 1e-12);
+    CHECK_NEAR(v0->cam.cy, 6 * 7.0 / 12, 1e-12);
+    check_project(&v0->cam, 0.5, 0.25, 0, 10 * 10.0 / 16, 5 * 7.0 / 12);
+    CHECK(v0->image && v0->image->width == 10 && v0->image->height == 7);
+    CHECK(d->max_width == 10 && !d->white_background);
+    mgs_dataset_destroy(d);
+  }
+  /* a downscale factor given: no cap; round(w / f) as Python's round (16 / 3 -> 5, 12 / 3 -> 4) */
+  o.downscale = 3;
+  d = NULL;
+  CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+  if (d) {
+    v0 = &d->views[MGS_SPLIT_TRAIN][0];
+    CHECK(v0->cam.width == 5 && v0->cam.height == 4 && d->max_width == 0);
+    CHECK(v0->image && v0->image->width == 5 && v0->image->height == 4);
+    mgs_dataset_destroy(d);
+  }
+  int w, h;
+  mgs_dataset_image_size(3000, 2000, 1, 1600, &w, &h);
+  CHECK(w == 1600 && h == 1066);
+  mgs_dataset_image_size(1600, 900, 1, 1600, &w, &h);
+  CHECK(w == 1600 && h == 900);
+  mgs_dataset_image_size(1601, 901, 1, 0, &w, &h);
+  CHECK(w == 1601 && h == 901);
+  mgs_dataset_image_size(10, 6, 4, 1600, &w, &h); /* 2.5 -> 2 and 1.5 -> 2: halves to even */
+  CHECK(w == 2 && h == 2);
+  o.max_width = 1600;
 
   /* lazily loaded images */
   o.load_images = 0;
@@ -234,6 +283,7 @@ static void test_nerfstudio(void) {
   CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
   if (!d) return;
   CHECK(d->format == MGS_DATASET_NERFSTUDIO);
+  CHECK(d->white_background == 0 && d->background[0] == 0.0f); /* the reference's default */
   /* 9 views sorted by name, every 8th (0 and 8) to test */
   CHECK(d->n_views[MGS_SPLIT_TRAIN] == 7 && d->n_views[MGS_SPLIT_TEST] == 2);
   CHECK(strcmp(d->views[MGS_SPLIT_TEST][0].name, "frame_00") == 0 && strcmp(d->views[MGS_SPLIT_TEST][1].name, "frame_08") == 0);
@@ -281,7 +331,7 @@ static void test_nerfstudio_bad(void) {
 
 /* ---------------- COLMAP ---------------- */
 
-enum { CM_GOOD = 0, CM_SIMPLE_RADIAL, CM_TRUNCATE_IMAGES, CM_UNKNOWN_CAMERA, CM_HUGE_COUNT, CM_OPENCV };
+enum { CM_GOOD = 0, CM_SIMPLE_RADIAL, CM_TRUNCATE_IMAGES, CM_UNKNOWN_CAMERA, CM_HUGE_COUNT, CM_OPENCV, CM_HUGE_POINTS };
 
 #define SQRT_HALF 0.70710678118654752440
 
@@ -336,7 +386,7 @@ static const char *make_colmap(const char *name, int binary, int variant) {
     }
     io_write_bytes(join(d, "sparse/0/images.bin"), b.p, variant == CM_TRUNCATE_IMAGES ? b.n - 10 : b.n);
     b.n = 0;
-    io_u64(&b, 3);
+    io_u64(&b, variant == CM_HUGE_POINTS ? (1ull << 31) : 3); /* issue 13: 2^31 points in ~200 bytes */
     for (int i = 0; i < 3; i++) {
       io_u64(&b, (uint64_t)(i + 1));
       io_f64(&b, i);
@@ -382,6 +432,7 @@ static void check_colmap_good(const char *dir) {
   CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
   if (!d) return;
   CHECK(d->format == MGS_DATASET_COLMAP);
+  CHECK(d->white_background == 0 && d->background[0] == 0.0f); /* the reference's default */
   CHECK(d->n_views[MGS_SPLIT_TRAIN] == 7 && d->n_views[MGS_SPLIT_TEST] == 2);
   CHECK(strcmp(d->views[MGS_SPLIT_TEST][0].name, "img_00") == 0 && strcmp(d->views[MGS_SPLIT_TEST][1].name, "img_08") == 0);
   const mgs_view *v1 = &d->views[MGS_SPLIT_TRAIN][0], *v3 = &d->views[MGS_SPLIT_TRAIN][2];
@@ -437,6 +488,7 @@ static void test_colmap_bad(void) {
   expect_load_fail(make_colmap("io_cm_b4", 1, CM_UNKNOWN_CAMERA), 0, MGS_ERR_FORMAT, "images.bin", "camera 7");
   expect_load_fail(make_colmap("io_cm_b5", 0, CM_UNKNOWN_CAMERA), 0, MGS_ERR_FORMAT, "images.txt", "camera 7");
   expect_load_fail(make_colmap("io_cm_b6", 1, CM_HUGE_COUNT), 0, MGS_ERR_FORMAT, "images.bin", "does not fit");
+  expect_load_fail(make_colmap("io_cm_b6p", 1, CM_HUGE_POINTS), 0, MGS_ERR_FORMAT, "points3D.bin", "2147483648");
   const char *dir = make_colmap("io_cm_b7", 1, CM_GOOD);
   unlink(join(dir, "images/img_04.png"));
   expect_load_fail(dir, 0, MGS_ERR_IO, "img_04.png", "not found");

@@ -170,8 +170,113 @@ static void test_bad_files(void) {
   mgs_vdb_grid_destroy(g);
 }
 
+
+/* Reads `path` as `morsegs persistence` does; returns the status, message in err. */
+static mgs_status read_any(const char *path, mgs_error *err) {
+  mgs_vdb_grid *r = NULL;
+  mgs_status st = mgs_vdb_read_grid(path, NULL, &r, err);
+  CHECK((st == MGS_OK) == (r != NULL));
+  mgs_vdb_grid_destroy(r);
+  return st;
+}
+
+static unsigned char *load(const char *path, size_t *n) {
+  char *d = NULL;
+  mgs_error err;
+  if (mgs_read_file(path, &d, n, &err) != MGS_OK) return NULL;
+  return (unsigned char *)d;
+}
+
+static void save(const char *path, const unsigned char *d, size_t n) {
+  mgs_error err;
+  CHECK_OK(mgs_write_file_atomic(path, d, n, &err), &err);
+}
+
+/* Files OpenVDB's own reader took badly (issue 13): truncated anywhere (the same file gave
+ * a clean error or grew to 22 GB from run to run), a root claiming 2^31 children or tiles,
+ * a zero voxel size, a metadata length of 4 GB. Each must fail with a message naming the
+ * file, the same message every time. */
+static void test_hostile_files(void) {
+  const char *dir = mgs_test_tmpdir("vdb_hostile");
+  char path[512], bad[600];
+  mgs_error err = {0}, err2 = {0};
+  int32_t o[3] = {0, 0, 0}, d[3] = {12, 12, 12};
+  float v[12 * 12 * 12];
+  for (int i = 0; i < 12 * 12 * 12; i++) v[i] = (float)(i % 7) * 0.3f - 0.9f;
+  mgs_vdb_grid *g = NULL;
+  CHECK_OK(mgs_vdb_grid_from_dense("sdf", MGS_VDB_CLASS_LEVEL_SET, 0.125, NULL, 3.25f, o, d, v, &g, &err), &err);
+  snprintf(path, sizeof path, "%s/ls.vdb", dir);
+  const mgs_vdb_grid *gs[1] = {g};
+  CHECK_OK(mgs_vdb_write(path, gs, 1, NULL, 0, NULL, &err), &err);
+  mgs_vdb_grid_destroy(g);
+  CHECK(read_any(path, &err) == MGS_OK);
+  size_t n = 0;
+  unsigned char *b = load(path, &n);
+  CHECK(b != NULL && n > 200);
+  if (!b) return;
+  snprintf(bad, sizeof bad, "%s/bad.vdb", dir);
+  /* Truncated at 40 points through the file, each read three times. */
+  for (int k = 0; k < 40; k++) {
+    size_t cut = n * (size_t)k / 40 + (size_t)k;
+    save(bad, b, cut);
+    mgs_status s1 = read_any(bad, &err);
+    CHECK_MSG(s1 != MGS_OK && strstr(err.msg, "bad.vdb"), "cut at %zu: %s", cut, err.msg);
+    for (int rep = 0; rep < 2; rep++) {
+      CHECK(read_any(bad, &err2) == s1);
+      CHECK_MSG(!strcmp(err.msg, err2.msg), "cut at %zu: '%s' then '%s'", cut, err.msg, err2.msg);
+    }
+  }
+  fprintf(stderr, "  truncated: %s\n", err.msg);
+  /* The root's topology: background 3.25f, tile count, child count. */
+  const unsigned char bg[4] = {0x00, 0x00, 0x50, 0x40}; /* 3.25f little-endian */
+  size_t at = 0;
+  for (size_t i = 0; i + 12 <= n && !at; i++)
+    if (!memcmp(b + i, bg, 4) && b[i + 4] == 0 && b[i + 5] == 0 && b[i + 6] == 0 && b[i + 7] == 0 && b[i + 8] >= 1 &&
+        b[i + 9] == 0 && b[i + 10] == 0 && b[i + 11] == 0)
+      at = i;
+  CHECK_MSG(at > 0, "root topology not found");
+  for (int field = 0; field < 2 && at; field++) {
+    unsigned char *c = malloc(n);
+    memcpy(c, b, n);
+    const unsigned char big[4] = {0xff, 0xff, 0xff, 0x7f};
+    memcpy(c + at + 4 + 4 * field, big, 4);
+    save(bad, c, n);
+    free(c);
+    CHECK_MSG(read_any(bad, &err) != MGS_OK && strstr(err.msg, "bad.vdb"), "2^31 %s: %s", field ? "children" : "tiles", err.msg);
+    fprintf(stderr, "  2^31 %s: %s\n", field ? "children" : "tiles", err.msg);
+  }
+  /* Zero voxel size: every 0.125 (the transform's scale and its inverse's source) to 0. */
+  {
+    unsigned char *c = malloc(n);
+    memcpy(c, b, n);
+    const double eighth = 0.125, zero = 0.0;
+    int hits = 0;
+    for (size_t i = 0; i + 8 <= n; i++)
+      if (!memcmp(c + i, &eighth, 8)) { memcpy(c + i, &zero, 8); hits++; }
+    CHECK(hits >= 3);
+    save(bad, c, n);
+    free(c);
+    CHECK_MSG(read_any(bad, &err) != MGS_OK && strstr(err.msg, "bad.vdb"), "zero voxel: %s", err.msg);
+    fprintf(stderr, "  zero voxel size: %s\n", err.msg);
+  }
+  /* The first file-metadata name claims 4 GB: refused before anything is allocated. */
+  {
+    unsigned char *c = malloc(n);
+    memcpy(c, b, n);
+    const unsigned char huge[4] = {0xf0, 0xff, 0xff, 0xff};
+    memcpy(c + 61, huge, 4); /* magic 8, version 4, library 8, flag 1, UUID 36, count 4 */
+    save(bad, c, n);
+    free(c);
+    CHECK_MSG(read_any(bad, &err) == MGS_ERR_FORMAT && strstr(err.msg, "bad.vdb") && strstr(err.msg, "metadata"), "%s", err.msg);
+    mgs_vdb_file_meta m;
+    CHECK(mgs_vdb_read_meta(bad, &m, &err) == MGS_ERR_FORMAT && strstr(err.msg, "bad.vdb"));
+  }
+  free(b);
+}
+
 int main(void) {
   RUN(test_write_read);
   RUN(test_bad_files);
+  RUN(test_hostile_files);
   return mgs_test_finish();
 }

@@ -1,0 +1,71 @@
+/* Loss terms beside the photometric loss: the one way a regularizer (MorseGS's topological
+ * and normal losses, Topology-GS's PersLoss, ...) plugs into the trainer, as density
+ * control plugs in through train/mgs_strategy.h. A term adds its weighted value and its
+ * gradient at one of two places of an iteration:
+ *
+ *   image_grad  after the photometric loss, before the backward: adds dL/dcolor of the
+ *               rendered image (the rasterizer's backward carries it to the Gaussians);
+ *   model_grad  after the backward, before the strategy's hook and Adam: adds dL/dθ into
+ *               the gradient model directly (losses defined on the Gaussians or on fields
+ *               built from them).
+ *
+ * A term that is active in an iteration with a model_grad makes the trainer run that
+ * iteration's backward and Adam step unfused (the gradient arrays must exist); image-only
+ * terms keep the fused path. Terms see the model before this iteration's density control.
+ * Their state (schedules, cached analyses) goes into checkpoints through save/load. */
+#ifndef MGS_TERM_H
+#define MGS_TERM_H
+#include <stdio.h>
+#include "core/mgs_error.h"
+#include "core/mgs_gaussians.h"
+#include "core/mgs_dataset.h"
+#include "core/mgs_rng.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What a term sees of one iteration. */
+typedef struct mgs_term_step {
+  int iteration;                /* 1-based, as the reference */
+  int iterations;               /* the run's total */
+  const mgs_gaussians *model;
+  const mgs_view *view;         /* the training view of this iteration (camera, GT image) */
+  size_t view_index;            /* its index among the training views */
+  const float *color;           /* rendered image, width x height x 3, row-major */
+  const float *gt;              /* ground truth, same layout */
+  int width, height;
+  int active_sh;
+  double extent;                /* scene radius (the reference's cameras_extent) */
+  mgs_rng *rng;
+  float *dl_dcolor;             /* image_grad adds here */
+  mgs_gaussians *grad;          /* model_grad adds here (the model's n and SH degree) */
+  double value;                 /* out: the term's weighted loss value this iteration */
+} mgs_term_step;
+
+typedef struct mgs_term_ops {
+  const char *name;             /* also the checkpoint's key for its state (< 32 chars) */
+  /* Which hooks run in this iteration: MGS_TERM_IMAGE | MGS_TERM_MODEL bits (0: none). */
+  unsigned (*active)(void *self, int iteration);
+  mgs_status (*image_grad)(void *self, mgs_term_step *s, mgs_error *err);
+  mgs_status (*model_grad)(void *self, mgs_term_step *s, mgs_error *err);
+  mgs_status (*save)(void *self, FILE *f, mgs_error *err);           /* may be NULL */
+  mgs_status (*load)(void *self, FILE *f, mgs_error *err);           /* may be NULL */
+  void (*destroy)(void *self);
+} mgs_term_ops;
+
+enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u };
+
+typedef struct mgs_term {
+  const mgs_term_ops *ops;
+  void *self;
+} mgs_term;
+
+/* Wraps ops + self in a heap term (NULL on allocation failure, self then destroyed). */
+mgs_term *mgs_term_create(const mgs_term_ops *ops, void *self);
+void mgs_term_destroy(mgs_term *t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

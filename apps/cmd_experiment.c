@@ -38,6 +38,7 @@
 #include "apps/mgs_cli.h"
 #include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
+#include "topo/mgs_diagram_plot.h"
 
 /* ---------------------------------------------------------------- the variant table */
 typedef struct variant_def {
@@ -320,7 +321,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   int a = 0;
   argv[a++] = "morsegs"; argv[a++] = "train"; argv[a++] = ds->path; argv[a++] = "-o"; argv[a++] = it->dir;
   argv[a++] = "--iters"; argv[a++] = iters_s; argv[a++] = "--seed"; argv[a++] = seed_s;
-  argv[a++] = "--save-at"; argv[a++] = save_s; argv[a++] = "--checkpoint-every"; argv[a++] = "0";
+  if (save_s[0]) { argv[a++] = "--save-at"; argv[a++] = save_s; } /* else train's default (harmless) */
+  argv[a++] = "--checkpoint-every"; argv[a++] = "0";
   argv[a++] = "--force"; argv[a++] = "--quiet";
   for (int k = 0; vs->def->args[k] && a < 40; k++) argv[a++] = vs->def->args[k];
   if (it->factor != 1.0) { argv[a++] = vs->knob; argv[a++] = knob_s; }
@@ -814,6 +816,7 @@ fail:
   sl_free(&e.train_args);
   sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom);
   if (lock_fd >= 0) close(lock_fd);
+  mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;
 usage_fail:
   rc = 2;

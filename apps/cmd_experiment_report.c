@@ -8,7 +8,7 @@
  * seeds in the same units (relative: divided by its mean). With noise = max(spread, sd of the
  * change), a change is significant when |mean| > 2 noise. Then "yes" = significant, in the
  * hypothesis' direction and at least the seed's target (H1 -30 %, H2 -90 %, H3 -40 %, H4
- * +0.5 dB); "partly" = significant in the right direction, short of the target; "worse" =
+ * +0.5 dB, SSIM +0.01); "partly" = significant in the right direction, short of the target; "worse" =
  * significant in the wrong direction; "no" = not significant; "n/a" = fewer than 2 seeds
  * or no measurement. H3 compares at equal PSNR: the variant's count against the baseline's
  * count–PSNR curve (the knob sweep, log-count interpolated linearly in PSNR) at the
@@ -27,14 +27,17 @@ typedef struct hyp_def {
   int direction;      /* -1 lower is better */
   double target;
   int relative;
+  const char *fmt, *fmt_sd; /* change (x100 when relative) and its sd */
 } hyp_def;
 
+/* Order matters: metric() below reads the measure by index. */
 static const hyp_def HYPS[] = {
-  {"H1", "H1 Chamfer", "%", -1, -0.30, 1},
-  {"H2", "H2 floaters (seed's count)", "%", -1, -0.90, 1},
-  {"H2_visible", "H2 floaters (visible mass)", "%", -1, -0.90, 1},
-  {"H3", "H3 Gaussians at equal PSNR", "%", -1, -0.40, 1},
-  {"H4", "H4 PSNR", "dB", +1, 0.5, 0},
+  {"H1", "H1 Chamfer", "%", -1, -0.30, 1, "%+.1f", "%.1f"},
+  {"H2", "H2 floaters (seed's count)", "%", -1, -0.90, 1, "%+.1f", "%.1f"},
+  {"H2_visible", "H2 floaters (visible mass)", "%", -1, -0.90, 1, "%+.1f", "%.1f"},
+  {"H3", "H3 Gaussians at equal PSNR", "%", -1, -0.40, 1, "%+.1f", "%.1f"},
+  {"H4", "H4 PSNR", "dB", +1, 0.5, 0, "%+.2f", "%.2f"},
+  {"H4_ssim", "H4 SSIM", "", +1, 0.01, 0, "%+.4f", "%.4f"},
 };
 #define N_HYPS (sizeof HYPS / sizeof HYPS[0])
 
@@ -78,7 +81,8 @@ static double metric(const exp_run *r, int h) {
     case 1: return p->floaters;
     case 2: return p->floater_mass;
     case 3: return p->gaussians;
-    default: return p->psnr;
+    case 4: return p->psnr;
+    default: return p->ssim;
   }
 }
 
@@ -353,7 +357,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     "point's .ply and the final .ply. Analysis overhead: `analysis_seconds` of train_stats.json when the trainer reports it.\n"
     "- Verdicts: per-seed change against the baseline run of the same seed (relative; dB for PSNR); mean +- sd over "
     "seeds. Spread = the baseline's sd over seeds in the same units; noise = max(spread, sd of the change). \"yes\" = "
-    "|mean| > 2 noise, right direction, target reached (H1 <= -30 %%, H2 <= -90 %%, H3 <= -40 %%, H4 >= +0.5 dB); "
+    "|mean| > 2 noise, right direction, target reached (H1 <= -30 %%, H2 <= -90 %%, H3 <= -40 %%, H4 >= +0.5 dB PSNR and >= +0.01 SSIM); "
     "\"partly\" = significant, right direction, short of the target; \"worse\" = significant, wrong direction; \"no\" = "
     "not significant; \"n/a\" = fewer than 2 seeds or nothing to compare. H3 compares at equal PSNR: each seed's count "
     "against the baseline's count-PSNR curve (knob sweep, log count interpolated in PSNR) at that seed's PSNR.\n\n",
@@ -389,7 +393,8 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     for (size_t h = 0; h < N_HYPS; h++) fprintf(f, "---|");
     fprintf(f, "\n| target |");
     for (size_t h = 0; h < N_HYPS; h++)
-      fprintf(f, HYPS[h].relative ? " <= %+.0f %% |" : " >= %+.1f dB |", HYPS[h].relative ? 100 * HYPS[h].target : HYPS[h].target);
+      fprintf(f, HYPS[h].relative ? " <= %+.0f %% |" : " >= %+g %s |", HYPS[h].relative ? 100 * HYPS[h].target : HYPS[h].target,
+              HYPS[h].unit);
     fprintf(f, "\n");
     cJSON *jvars = cJSON_AddArrayToObject(od, "variants");
     for (size_t v = 0; v < in->n_variants; v++) {
@@ -422,8 +427,8 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
         }
         double sc = HYPS[h].relative ? 100 : 1;
         char a[32], b[32];
-        fmt_or_na(a, sizeof a, "%+.1f", vd.mean * sc);
-        fmt_or_na(b, sizeof b, "%.1f", vd.sd * sc);
+        fmt_or_na(a, sizeof a, HYPS[h].fmt, vd.mean * sc);
+        fmt_or_na(b, sizeof b, HYPS[h].fmt_sd, vd.sd * sc);
         fprintf(f, " %s ± %s %s → **%s**%s%s%s |", a, b, HYPS[h].unit, vd.verdict, vd.note[0] ? " (" : "",
                 vd.note, vd.note[0] ? ")" : "");
         cJSON_AddStringToObject(o, "verdict", vd.verdict);

@@ -148,7 +148,12 @@ static mgs_status eval_point(const lpvi_ctx *c, size_t i, lpvi_result *r) {
         if (dd <= radius) { memmove(cand + 3 * u, q, 3 * sizeof *q); u++; }
       }
       nc = u;
+      /* none inside: the 3-D Voronoi vertices of a surface patch lie near its medial
+         axis, away from the patch; the tangent plane is where points belong */
+      if (nc == 0) flat = 1;
     }
+  }
+  if (!flat) {
     double *PC = malloc(3 * (m + nc) * sizeof *PC);
     if (!PC) { st = mgs_error_set(err, MGS_ERR_NOMEM, "LPVI: out of memory"); goto out; }
     memcpy(PC, P, 3 * m * sizeof *P);

@@ -16,8 +16,10 @@
  * lift is from the mean, candidates must lie within the neighbourhood's bounding ball
  * (centre the mean, radius the largest distance to it; a disk in the plane for the 2-D
  * branch), tau and max_edge are scaled by extent / MGS_LPVI_REF_EXTENT, a neighbourhood
- * flat to rounding goes to the 2-D branch (the 3-D Voronoi diagram of coplanar points has
- * no finite vertex), and the original points are kept (first, in order). In both modes new
+ * flat to rounding, or with no candidate inside its ball, goes to the 2-D branch (the 3-D
+ * Voronoi vertices of coplanar points are not finite; those of a curved surface patch lie
+ * near its medial axis, far from the patch), and the original points are kept (first, in
+ * order). In both modes new
  * points get the inverse-distance-weighted colour of the neighbourhood they came from.
  *
  * Order and parallelism: which points are processed depends on the order (a point visited

@@ -425,7 +425,7 @@ mgs_status mgs_topo_weak_alpha_persistence(const double *pts, size_t n, mgs_topo
   }
   {
     /* faces of the tetrahedra, deduplicated through a hash of sorted vertex triples/pairs */
-    hmap hm_e, hm_t;
+    hmap hm_e = {0}, hm_t = {0};
     if (!hmap_init(&hm_e, 8 * nq) || !hmap_init(&hm_t, 4 * nq)) {
       hmap_free(&hm_e); hmap_free(&hm_t);
       st = mgs_error_set(err, MGS_ERR_NOMEM, "weak-alpha persistence: out of memory"); goto done;

@@ -124,7 +124,10 @@ int mgs_topogs_flags_extract(int *argc, char **argv, mgs_topogs_flags *f) {
 }
 
 const char *mgs_topogs_init(const mgs_topogs_flags *f, const char *init, int init_given) {
-  return f->preset && !init_given ? "lpvi" : init;
+  const char *use = f->preset && !init_given ? "lpvi" : init;
+  if ((f->given & (G_FAITHFUL | G_TAU | G_EDGE)) && strcmp(use, "lpvi"))
+    mgs_warn("--lpvi-faithful/--lpvi-tau/--lpvi-max-edge have no effect without --init lpvi (init is %s)", use);
+  return use;
 }
 
 void mgs_topogs_flags_restore(mgs_topogs_flags *f, const mgs_settings *prev) {

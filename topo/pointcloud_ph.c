@@ -214,6 +214,10 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
   if (!tri_cleared) goto oom;
 
   /* tetrahedra: H2 pairs (triangle creates, tetrahedron kills) */
+  if (nq && ne >= ((size_t)1 << 21)) {
+    st = mgs_error_set(err, MGS_ERR_ARG, "persistence: %zu edges (triangle keys hold edge ranks below 2^21)", ne);
+    goto done;
+  }
   if (nq) {
     hmap tm;
     if (!hmap_init(&tm, ntv)) goto oom;

@@ -10,11 +10,14 @@
 #include <dirent.h>
 #include <cjson/cJSON.h>
 #include "apps/mgs_cli.h"
+#include "apps/mgs_train_topogs.h"
 #include "core/mgs_core.h"
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
 
 static volatile sig_atomic_t g_stop = 0;
+/* Topology-GS flags (apps/train_topogs_flags.c): parsed before the option table */
+static mgs_topogs_flags g_topogs;
 static void on_sigint(int sig) { (void)sig; g_stop = 1; }
 
 static void usage(FILE *f) {
@@ -33,7 +36,8 @@ static void usage(FILE *f) {
     "      --test-every N      COLMAP/nerfstudio: every Nth view is a test view (8)\n"
     "      --seed S            random seed (0)\n"
     "      --strategy adc      density control: adc (reference) or none\n"
-    "      --init sfm|random   initial Gaussians: dataset points (falls back to random), or random\n"
+    "      --init sfm|random|lpvi  initial Gaussians: dataset points (falls back to random), random, or\n"
+    "                          LPVI over the dataset points (Topology-GS, below)\n"
     "      --random-points N   Gaussians of the random init (100000)\n"
     "      --densify-from N    (500)   --densify-until N (15000)   --densify-every N (100)\n"
     "      --position-lr-max-steps N  length of the position learning-rate decay (30000, the\n"
@@ -57,8 +61,9 @@ static void usage(FILE *f) {
     "                          (random chunk order, random within a chunk; default random as the reference)\n"
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "      --quiet             no progress bar\n"
-    "  Not available yet (later issues): --strategy morse, --topo-loss, --pers-loss,\n"
-    "  --normal-loss, --init levelset|lpvi.\n");
+    "  Not available yet (later issues): --strategy morse, --topo-loss, --normal-loss,\n"
+    "  --init levelset.\n");
+  mgs_topogs_usage(f);
 }
 
 enum {
@@ -183,6 +188,8 @@ int mgs_cmd_train(int argc, char **argv) {
   unsigned long long seed = 0;
   int c;
   unsigned char given[O_HELP + 1] = {0}; /* flags typed on this command line */
+  mgs_topogs_flags_init(&g_topogs);
+  if (mgs_topogs_flags_extract(&argc, argv, &g_topogs)) return 2;
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     if (c >= O_ITERS && c <= O_HELP) given[c] = 1;
@@ -288,9 +295,11 @@ int mgs_cmd_train(int argc, char **argv) {
       if (!given[O_STRATEGY] && (v = mgs_settings_get(&prev, "strategy"))) strategy = v;
       if (!given[O_FREEZE] && (v = mgs_settings_get(&prev, "freeze"))) o.freeze = !strcmp(v, "True");
       if (!given[O_INIT] && (v = mgs_settings_get(&prev, "init"))) init = v; /* for the record only */
+      mgs_topogs_flags_restore(&g_topogs, &prev);
     }
     free(cfg);
   }
+  init = mgs_topogs_init(&g_topogs, init, given[O_INIT]);
   if (given[O_DOWNSCALE] && !given[O_MAXW]) max_width = 0; /* a resolution given: no cap, as the reference */
   int rc = mgs_cmd_train_run(data, run, &o, strategy, init, save_at, downscale, max_width, white, test_every, resume, force,
                              threads, quiet, random_points, seed);
@@ -305,8 +314,8 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_train_options o = *op;
   if (!strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: --strategy morse is not available yet (comes in a later issue)\n"); return 2; }
   if (strcmp(strategy, "adc") && strcmp(strategy, "none")) { fprintf(stderr, "morsegs train: unknown --strategy '%s' (adc, none)\n", strategy); return 2; }
-  if (!strcmp(init, "levelset") || !strcmp(init, "lpvi")) { fprintf(stderr, "morsegs train: --init %s is not available yet (comes in a later issue)\n", init); return 2; }
-  if (strcmp(init, "sfm") && strcmp(init, "random")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random)\n", init); return 2; }
+  if (!strcmp(init, "levelset")) { fprintf(stderr, "morsegs train: --init %s is not available yet (comes in a later issue)\n", init); return 2; }
+  if (strcmp(init, "sfm") && strcmp(init, "random") && strcmp(init, "lpvi")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random, lpvi)\n", init); return 2; }
   int saves[64], n_saves = 0;
   for (const char *p = save_at; *p && n_saves < 64;) {
     char *end;
@@ -367,6 +376,8 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     g0 = mgs_gaussians_create(1, o.sh_degree); /* replaced by the checkpoint */
     size_t first;
     if (!g0 || (st = mgs_gaussians_append(g0, 1, &first, &err))) { mgs_gaussians_destroy(g0); if (!st) st = MGS_ERR_NOMEM; goto done; }
+  } else if (!strcmp(init, "lpvi")) {
+    st = mgs_topogs_init_model(&g_topogs, ds, o.sh_degree, seed, random_points, &g0, &err);
   } else if (!strcmp(init, "sfm") && ds->init_points && ds->init_points->n > 0) {
     st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &g0, &err);
   } else {
@@ -388,6 +399,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_strategy *strat = NULL;
   if (!strcmp(strategy, "adc")) strat = mgs_strategy_adc_create(&o.adc);
   if ((st = mgs_trainer_create(ds, &o, g0, strat, &t, &err))) goto done;
+  if ((st = mgs_topogs_add_terms(&g_topogs, t, &err))) goto done;
   if (resume) {
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
@@ -439,6 +451,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_seti(&s, "checkpoint_every", o.checkpoint_every);
     mgs_settings_seti(&s, "threads", mgs_parallel_max_threads());
     mgs_settings_set(&s, "freeze", o.freeze ? "True" : "False", 0);
+    mgs_topogs_flags_record(&g_topogs, !strcmp(init_used, "lpvi"), &s);
     char *cfg = mgs_path_join(run, "cfg_args");
     st = mgs_settings_write(cfg, &s, &err);
     free(cfg);

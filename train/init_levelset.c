@@ -15,7 +15,7 @@
 void mgs_levelset_options_default(mgs_levelset_options *o) {
   o->count = 0;
   o->resolution = 128;
-  o->knn = 12;
+  o->knn = 32;
   o->levels = 1;
   o->delta = 1.0;
   o->flatness = 0.1;

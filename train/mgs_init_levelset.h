@@ -32,7 +32,8 @@ extern "C" {
 typedef struct mgs_levelset_options {
   size_t count;       /* Gaussians to create (0 = as many as input points, at least 10000) */
   int resolution;     /* voxels along the points' bounding-box diagonal (128) */
-  int knn;            /* neighbours for PCA normals and orientation (12) */
+  int knn;            /* neighbours for PCA normals and orientation (32: the scene maker's 1 % noise
+                         needs ~30, measured in tests/train/test_init_coverage.c) */
   int levels;         /* level sets at kδ, k = −levels..levels (1: three sheets) */
   double delta;       /* spacing δ in voxels (1.0) */
   double flatness;    /* normal std-dev / tangent std-dev (0.1) */

@@ -128,6 +128,34 @@ int main(void) {
   const size_t ns = 20000;
   float *samples = malloc(ns * 3 * sizeof(float));
   CHECK_OK(mgs_mesh_sample_surface(gt, ns, 99, samples, NULL, &err), &err);
+  {
+    /* orientation of the PCA normals against the GT surface's (the closest point's face) */
+    float *nrm = malloc(pc->n * 3 * sizeof(float)), *cl = malloc(pc->n * 3 * sizeof(float)), *dd = malloc(pc->n * sizeof(float));
+    float *gn = malloc(ns * 3 * sizeof(float));
+    size_t flipped = 0, agree = 0, near = 0;
+    const char *ke = getenv("KNN"); int kk = ke ? atoi(ke) : 32;
+    CHECK_OK(mgs_point_normals(pc->xyz, pc->n, kk, nrm, &flipped, &err), &err);
+    CHECK_OK(mgs_mesh_sample_surface(gt, ns, 99, samples, gn, &err), &err);
+    nn_grid sg;
+    nn_build(&sg, samples, ns, 0.05);
+    for (size_t i = 0; i < pc->n; i++) {
+      /* the nearest GT sample's normal */
+      double best = 1e30;
+      size_t bi = 0;
+      for (size_t k = 0; k < ns; k++) {
+        const float *q = samples + 3 * k, *p0 = pc->xyz + 3 * i;
+        double e = (q[0] - p0[0]) * (q[0] - p0[0]) + (q[1] - p0[1]) * (q[1] - p0[1]) + (q[2] - p0[2]) * (q[2] - p0[2]);
+        if (e < best) { best = e; bi = k; }
+      }
+      double dot = nrm[3 * i] * gn[3 * bi] + nrm[3 * i + 1] * gn[3 * bi + 1] + nrm[3 * i + 2] * gn[3 * bi + 2];
+      agree += dot > 0;
+      near += fabs(dot) > 0.9;
+    }
+    fprintf(stderr, "  genus2 normals: %zu / %zu oriented as the GT surface, %zu within 26 deg of its line\n", agree, pc->n, near);
+    CHECK(agree >= pc->n * 98 / 100);
+    free(sg.start); free(sg.ids);
+    free(nrm); free(cl); free(dd); free(gn);
+  }
   /* uneven: keep every 10th point with x > 0 */
   float *uxyz = malloc(pc->n * 3 * sizeof(float)), *urgb = malloc(pc->n * 3 * sizeof(float));
   size_t un = 0;

@@ -55,8 +55,9 @@ static void usage(FILE *f) {
     "      --strategy adc      density control: adc (reference) or none\n"
     "      --init sfm|random|levelset  initial Gaussians: dataset points (falls back to random), random,\n"
     "                          or MorseGS level sets of the dataset points' distance field (flat, tangent)\n"
-    "      --normal-loss[=G]   MorseGS normal consistency loss, weight G (0.02), from iteration 3000,\n"
-    "                          SDF rebuilt from the model every 500 iterations\n"
+    "      --normal-loss[=G]   MorseGS normal consistency loss, weight G (0.02), from iteration 3000\n"
+    "                          (half the run if shorter than 6000), SDF rebuilt from the model every\n"
+    "                          500 iterations (resolution 128 of the diagonal, tau 0.5)\n"
     "      --random-points N   Gaussians of the random init (100000)\n"
     "      --densify-from N    (500)   --densify-until N (15000)   --densify-every N (100)\n"
     "      --position-lr-max-steps N  length of the position learning-rate decay (30000, the\n"
@@ -389,6 +390,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_normal_options no;
     mgs_normal_options_default(&no);
     no.gamma = g_normal_loss;
+    if (o.iterations < 2 * no.from_iter) no.from_iter = o.iterations / 2 > 0 ? o.iterations / 2 : 1; /* short runs: the second half */
     mgs_term *nt = NULL;
     if ((st = mgs_term_normal_create(&no, &nt, NULL, &err)) || (st = mgs_trainer_add_term(t, nt, &err))) goto done;
   }

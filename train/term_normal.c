@@ -77,52 +77,55 @@ mgs_status mgs_normal_loss(const mgs_gaussians *g, const float *T, double p, dou
   return MGS_OK;
 }
 
-/* T at the means: the gradients at the 8 voxel centres around each mean (there the
-   grid's trilinear gradient is that voxel's own central difference), blended with the
-   trilinear weights. pts/gr: scratch of n*8*3 floats. */
-static void tensors(const mgs_vdb_grid *sdf, const mgs_gaussians *g, float *T, float *pts, float *gr) {
+/* T at points xyz[m*3]: the central-difference gradients at the 8 voxel centres around
+   each point (the stencil mgs_vdb_sample_gradient interpolates), blended with the
+   trilinear weights; one batch read of the 4x4x4 voxel block per point. ijk/vals: scratch
+   of m*64 entries. */
+static void tensors_at(const mgs_vdb_grid *sdf, size_t m, const float *xyz, float *T, int32_t *ijk, float *vals) {
   double tr[3];
   mgs_vdb_grid_translation(sdf, tr);
   const double h = mgs_vdb_grid_voxel_size(sdf);
-  double (*wts)[8] = malloc(sizeof(double[8]) * (g->n ? g->n : 1));
-  if (!wts) { memset(T, 0, g->n * 6 * sizeof(float)); return; }
-  for (size_t i = 0; i < g->n; i++) {
-    double f[3], b[3];
-    for (int a = 0; a < 3; a++) {
-      double u = ((double)g->mean[3 * i + a] - tr[a]) / h;
-      b[a] = floor(u);
-      f[a] = u - b[a];
-    }
-    for (int c = 0; c < 8; c++) {
-      double w = 1;
-      for (int a = 0; a < 3; a++) {
-        int bit = (c >> (2 - a)) & 1;
-        pts[24 * i + 3 * c + a] = (float)((b[a] + bit) * h + tr[a]);
-        w *= bit ? f[a] : 1 - f[a];
-      }
-      wts[i][c] = w;
-    }
+  for (size_t i = 0; i < m; i++) {
+    int32_t b[3];
+    for (int a = 0; a < 3; a++) b[a] = (int32_t)floor(((double)xyz[3 * i + a] - tr[a]) / h) - 1;
+    for (int x = 0; x < 4; x++)
+      for (int y = 0; y < 4; y++)
+        for (int z = 0; z < 4; z++) {
+          int32_t *o = ijk + 3 * (64 * i + 16 * x + 4 * y + z);
+          o[0] = b[0] + x; o[1] = b[1] + y; o[2] = b[2] + z;
+        }
   }
-  mgs_vdb_sample_gradient(sdf, g->n * 8, pts, gr, NULL);
-  for (size_t i = 0; i < g->n; i++) {
+  mgs_vdb_values(sdf, m * 64, ijk, vals, NULL);
+  for (size_t i = 0; i < m; i++) {
+    const float *v = vals + 64 * i;
+    double f[3];
+    for (int a = 0; a < 3; a++) {
+      double u = ((double)xyz[3 * i + a] - tr[a]) / h;
+      f[a] = u - floor(u);
+    }
     double t6[6] = {0};
     for (int c = 0; c < 8; c++) {
-      const float *v = gr + 24 * i + 3 * c;
-      const double w = wts[i][c];
-      t6[0] += w * v[0] * v[0]; t6[1] += w * v[0] * v[1]; t6[2] += w * v[0] * v[2];
-      t6[3] += w * v[1] * v[1]; t6[4] += w * v[1] * v[2]; t6[5] += w * v[2] * v[2];
+      const int cx = 1 + ((c >> 2) & 1), cy = 1 + ((c >> 1) & 1), cz = 1 + (c & 1);
+      const double w = (cx == 2 ? f[0] : 1 - f[0]) * (cy == 2 ? f[1] : 1 - f[1]) * (cz == 2 ? f[2] : 1 - f[2]);
+#define V(x, y, z) ((double)v[16 * (x) + 4 * (y) + (z)])
+      const double gx = (V(cx + 1, cy, cz) - V(cx - 1, cy, cz)) / (2 * h);
+      const double gy = (V(cx, cy + 1, cz) - V(cx, cy - 1, cz)) / (2 * h);
+      const double gz = (V(cx, cy, cz + 1) - V(cx, cy, cz - 1)) / (2 * h);
+#undef V
+      t6[0] += w * gx * gx; t6[1] += w * gx * gy; t6[2] += w * gx * gz;
+      t6[3] += w * gy * gy; t6[4] += w * gy * gz; t6[5] += w * gz * gz;
     }
     for (int k = 0; k < 6; k++) T[6 * i + k] = (float)t6[k];
   }
-  free(wts);
 }
 
 void mgs_normal_tensors(const mgs_vdb_grid *sdf, const mgs_gaussians *g, float *T) {
-  float *pts = malloc(g->n * 24 * sizeof(float) + 1), *gr = malloc(g->n * 24 * sizeof(float) + 1);
-  if (pts && gr) tensors(sdf, g, T, pts, gr);
+  int32_t *ijk = malloc(g->n * 64 * 3 * sizeof(int32_t) + 1);
+  float *vals = malloc(g->n * 64 * sizeof(float) + 1);
+  if (ijk && vals) tensors_at(sdf, g->n, g->mean, T, ijk, vals);
   else memset(T, 0, g->n * 6 * sizeof(float));
-  free(pts);
-  free(gr);
+  free(ijk);
+  free(vals);
 }
 
 /* ---------------------------------------------------------------- the term */
@@ -131,9 +134,17 @@ struct mgs_normal_term {
   mgs_vdb_grid *sdf;
   int sdf_iter;   /* iteration the grid was made at (-1: none) */
   int builds;     /* grids this term built itself */
-  float *T;       /* scratch: the tensors at the means (n*6) */
-  float *pts, *gr; /* scratch: the 8 voxel centres per mean and their gradients (n*24) */
+  /* Tensors per Gaussian, cached: a row is recomputed when the grid changes or when the
+     Gaussian's mean is more than a quarter voxel from where its tensor was taken (this
+     also catches rows that densification or pruning shifted). */
+  float *T, *Tmean;   /* n*6 tensors, n*3 means they were taken at */
+  size_t cached_n;    /* rows valid in T (0 after a new grid) */
   size_t cap;
+  size_t *rows;       /* scratch: rows to refresh */
+  float *xyz, *Tnew;  /* scratch: their means and new tensors */
+  int32_t *ijk;       /* scratch: 64 voxels per refreshed row */
+  float *vals;
+  size_t refreshed;   /* rows recomputed so far (for the notes' cost figures) */
 };
 
 static unsigned normal_active(void *self, int it) {
@@ -169,6 +180,7 @@ static mgs_status build_sdf(mgs_normal_term *t, const mgs_gaussians *g, int it, 
   }
   mgs_vdb_grid_destroy(t->sdf);
   t->sdf = sdf;
+  t->cached_n = 0;
   t->builds++;
   return MGS_OK;
 }
@@ -184,16 +196,47 @@ static mgs_status normal_model_grad(void *self, mgs_term_step *s, mgs_error *err
   if (!t->sdf || g->n == 0) return MGS_OK;
   if (g->n > t->cap) {
     size_t cap = g->n + g->n / 2;
-    float *a = realloc(t->T, cap * 6 * sizeof(float));
-    if (a) t->T = a;
-    float *b = a ? realloc(t->pts, cap * 24 * sizeof(float)) : NULL;
-    if (b) t->pts = b;
-    float *c = b ? realloc(t->gr, cap * 24 * sizeof(float)) : NULL;
-    if (c) t->gr = c;
-    if (!a || !b || !c) return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory for %zu Gaussians", g->n);
+    float *T = realloc(t->T, cap * 6 * sizeof(float));
+    if (T) t->T = T;
+    float *Tm = T ? realloc(t->Tmean, cap * 3 * sizeof(float)) : NULL;
+    if (Tm) t->Tmean = Tm;
+    size_t *rows = Tm ? realloc(t->rows, cap * sizeof(size_t)) : NULL;
+    if (rows) t->rows = rows;
+    float *xyz = rows ? realloc(t->xyz, cap * 3 * sizeof(float)) : NULL;
+    if (xyz) t->xyz = xyz;
+    float *Tn = xyz ? realloc(t->Tnew, cap * 6 * sizeof(float)) : NULL;
+    if (Tn) t->Tnew = Tn;
+    int32_t *ijk = Tn ? realloc(t->ijk, cap * 64 * 3 * sizeof(int32_t)) : NULL;
+    if (ijk) t->ijk = ijk;
+    float *vals = ijk ? realloc(t->vals, cap * 64 * sizeof(float)) : NULL;
+    if (vals) t->vals = vals;
+    if (!vals) return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory for %zu Gaussians", g->n);
     t->cap = cap;
   }
-  tensors(t->sdf, g, t->T, t->pts, t->gr);
+  const double h = mgs_vdb_grid_voxel_size(t->sdf), tol2 = 0.0625 * h * h;
+  size_t m = 0;
+  for (size_t i = 0; i < g->n; i++) {
+    int stale = i >= t->cached_n;
+    if (!stale) {
+      double d2 = 0;
+      for (int a = 0; a < 3; a++) { double d = (double)g->mean[3 * i + a] - t->Tmean[3 * i + a]; d2 += d * d; }
+      stale = !(d2 <= tol2);
+    }
+    if (stale) {
+      t->rows[m] = i;
+      memcpy(t->xyz + 3 * m, g->mean + 3 * i, 3 * sizeof(float));
+      m++;
+    }
+  }
+  if (m) {
+    tensors_at(t->sdf, m, t->xyz, t->Tnew, t->ijk, t->vals);
+    for (size_t k = 0; k < m; k++) {
+      memcpy(t->T + 6 * t->rows[k], t->Tnew + 6 * k, 6 * sizeof(float));
+      memcpy(t->Tmean + 3 * t->rows[k], t->xyz + 3 * k, 3 * sizeof(float));
+    }
+    t->refreshed += m;
+  }
+  t->cached_n = g->n;
   return mgs_normal_loss(g, t->T, t->o.sharpness, t->o.gamma, s->grad, &s->value, NULL, err);
 }
 
@@ -225,9 +268,13 @@ static mgs_status normal_save(void *self, FILE *f, mgs_error *err) {
   remove(path);
   remove(tmp);
   if (st) return st;
-  uint64_t n = size;
+  uint64_t n = size, cn = t->cached_n;
   if (fwrite(&n, sizeof n, 1, f) != 1 || fwrite(data, 1, size, f) != size) st = mgs_error_set(err, MGS_ERR_IO, "normal loss: checkpoint write failed");
   free(data);
+  /* the tensor cache, so a resumed run samples exactly what an uninterrupted one would */
+  if (st == MGS_OK && (fwrite(&cn, sizeof cn, 1, f) != 1 || fwrite(t->T, sizeof(float), 6 * cn, f) != 6 * cn ||
+                       fwrite(t->Tmean, sizeof(float), 3 * cn, f) != 3 * cn))
+    st = mgs_error_set(err, MGS_ERR_IO, "normal loss: checkpoint write failed");
   return st;
 }
 
@@ -239,6 +286,7 @@ static mgs_status normal_load(void *self, FILE *f, mgs_error *err) {
   t->builds = hdr[1];
   mgs_vdb_grid_destroy(t->sdf);
   t->sdf = NULL;
+  t->cached_n = 0;
   if (!hdr[2]) return MGS_OK;
   uint64_t n;
   if (fread(&n, sizeof n, 1, f) != 1 || n > ((uint64_t)1 << 40))
@@ -254,7 +302,22 @@ static mgs_status normal_load(void *self, FILE *f, mgs_error *err) {
   if (st == MGS_OK) st = mgs_vdb_read_grid(path, NULL, &t->sdf, err);
   remove(path);
   remove(tmp);
-  return st;
+  if (st) return st;
+  uint64_t cn;
+  if (fread(&cn, sizeof cn, 1, f) != 1 || cn > ((uint64_t)1 << 34))
+    return mgs_error_set(err, MGS_ERR_FORMAT, "normal loss: truncated checkpoint state");
+  if (cn > t->cap) {
+    float *T = realloc(t->T, cn * 6 * sizeof(float));
+    if (T) t->T = T;
+    float *Tm = T ? realloc(t->Tmean, cn * 3 * sizeof(float)) : NULL;
+    if (Tm) t->Tmean = Tm;
+    if (!Tm) return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory reading the checkpoint");
+    /* the other scratch arrays grow at the next step (cap stays, so they are reallocated) */
+  }
+  if (fread(t->T, sizeof(float), 6 * cn, f) != 6 * cn || fread(t->Tmean, sizeof(float), 3 * cn, f) != 3 * cn)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "normal loss: truncated checkpoint state");
+  t->cached_n = cn;
+  return MGS_OK;
 }
 
 static void normal_destroy(void *self) {
@@ -262,8 +325,12 @@ static void normal_destroy(void *self) {
   if (!t) return;
   mgs_vdb_grid_destroy(t->sdf);
   free(t->T);
-  free(t->pts);
-  free(t->gr);
+  free(t->Tmean);
+  free(t->rows);
+  free(t->xyz);
+  free(t->Tnew);
+  free(t->ijk);
+  free(t->vals);
   free(t);
 }
 
@@ -294,6 +361,7 @@ mgs_status mgs_term_normal_set_sdf(mgs_normal_term *t, const mgs_vdb_grid *sdf, 
   if (!c) return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory copying the SDF");
   mgs_vdb_grid_destroy(t->sdf);
   t->sdf = c;
+  t->cached_n = 0;
   t->sdf_iter = iteration;
   return MGS_OK;
 }

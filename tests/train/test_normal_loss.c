@@ -228,6 +228,17 @@ static void test_term_sphere(void) {
     for (size_t i = 0; i < 3 * n; i++) bad->log_scale[i] -= 0.05f * (float)n * gr->log_scale[i];
   }
   double v1 = run_term(term, bad, 40, gr);
+  {
+    double t0 = mgs_now();
+    for (int k = 0; k < 10; k++) run_term(term, bad, 40, gr);
+    double t1 = mgs_now();
+    float *T = malloc(n * 6 * sizeof(float));
+    mgs_normal_tensors(mgs_term_normal_sdf(h, NULL, NULL), bad, T);
+    double t2 = mgs_now();
+    free(T);
+    fprintf(stderr, "  cost: %.1f us per Gaussian per cached call, %.1f us per Gaussian to refresh a tensor\n",
+            1e6 * (t1 - t0) / 10 / (double)n, 1e6 * (t2 - t1) / (double)n);
+  }
   fprintf(stderr, "  descent: %.4f -> %.4f\n", v0, v1);
   CHECK(v1 < 0.5 * v0);
   /* checkpoint state round trip: the same grid comes back */
@@ -249,6 +260,15 @@ static void test_term_sphere(void) {
     mgs_vdb_sample(s1, 8, pts, v1s);
     mgs_vdb_sample(s2, 8, pts, v2s);
     for (int k = 0; k < 8; k++) CHECK(v1s[k] == v2s[k]);
+  }
+  /* the tensor cache came along: both terms give the same value and gradient */
+  {
+    mgs_gaussians *g1 = model(n), *g2 = model(n);
+    double a1 = run_term(term, bad, 41, g1), a2 = run_term(t2, bad, 41, g2);
+    CHECK(a1 == a2);
+    CHECK(memcmp(g1->rot, g2->rot, 4 * n * sizeof(float)) == 0);
+    mgs_gaussians_destroy(g1);
+    mgs_gaussians_destroy(g2);
   }
   /* bad options: one line naming the flag */
   o.gamma = -1;

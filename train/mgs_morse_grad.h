@@ -25,6 +25,11 @@
  * stored, un-normalized quaternion: chained through q/|q| exactly as render/'s backward).
  * The kσ cutoff makes A jump by αᵢ e^{−k²/2} where a support boundary crosses x; that
  * jump is not differentiated (zero measure; the derivative is the one-sided interior one).
+ * Where {A = τ} itself runs along such a jump (A steps over τ there; 4 % of the first-ring
+ * band voxels of a 10-Gaussian cluster at k = 3, tests/train/test_morse_grad.c) no point
+ * has A = τ and the surface moves with the support boundary, which the formula does not
+ * describe: mgs_morse_closest_point refuses those voxels (MGS_ERR_NUMERIC) and callers
+ * should skip them (or build the grid with a larger k_sigma: the jump is e^{−k²/2}).
  *
  * A flat gradient. Where |∇A(c)| is tiny the surface is not a smooth manifold at c (a
  * saddle or extremum of A touching τ) and the quotient explodes. The denominator is
@@ -82,9 +87,15 @@ mgs_status mgs_morse_alpha_at(const mgs_gaussians *g, const mgs_morse_index *ix,
                               const mgs_morse_field_params *p, const double x[3], double *alpha,
                               double grad[3], mgs_error *err);
 
+/* Projection of x onto {A = τ}: damped Newton steps along ∇A (not the closest point
+ * where the surface curves; cheaper). MGS_ERR_NUMERIC in a flat region. */
+mgs_status mgs_morse_project(const mgs_gaussians *g, const mgs_morse_index *ix,
+                             const mgs_morse_field_params *p, const double x[3], float tau,
+                             double c[3], mgs_error *err);
 /* Closest point c of x on {A = τ}: Newton steps along ∇A from x onto the surface (the
  * projection), then Chopp's iteration (tangential move toward x, re-projection) until the
- * step is below tol·σ. *d_out (may be NULL): the signed distance of x, −|x−c| where
+ * tangential residual vanishes, polished by Newton on the optimality conditions
+ * (x − c ∥ ∇A(c), A(c) = τ) to ~1e-12 relative. *d_out (may be NULL): the signed distance of x, −|x−c| where
  * A(x) > τ. Fails with MGS_ERR_NUMERIC when the iteration reaches a flat region
  * (|∇A| ~ 0, A far from τ) or does not converge in 100 steps. */
 mgs_status mgs_morse_closest_point(const mgs_gaussians *g, const mgs_morse_index *ix,

@@ -337,6 +337,21 @@ static int project(const mgs_gaussians *g, const mgs_morse_index *ix, const mgs_
   return fabs(f->A - tau) <= 1e-9 * tau ? 0 : -1;
 }
 
+mgs_status mgs_morse_project(const mgs_gaussians *g, const mgs_morse_index *ix, const mgs_morse_field_params *pin,
+                             const double x[3], float tau, double c[3], mgs_error *err) {
+  mgs_morse_field_params p;
+  mgs_status st = resolve(g, ix, pin, &p, err);
+  if (st) return st;
+  if (!(tau > 0)) return mgs_error_set(err, MGS_ERR_ARG, "morse projection: tau %g must be positive", (double)tau);
+  double y[3] = {x[0], x[1], x[2]};
+  field_acc f;
+  if (project(g, ix, &p, y, tau, &f))
+    return mgs_error_set(err, MGS_ERR_NUMERIC, "morse projection: no surface A = %g reachable from (%g, %g, %g)",
+                         (double)tau, x[0], x[1], x[2]);
+  for (int a = 0; a < 3; a++) c[a] = y[a];
+  return MGS_OK;
+}
+
 /* Tangential residual of y as the closest point of x: |(x−y) − ((x−y)·n) n|. */
 static double tangential(const double x[3], const double y[3], const double grad[3]) {
   double gn = norm3(grad), r[3], rn = 0, t[3];

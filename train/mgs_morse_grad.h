@@ -72,14 +72,19 @@ typedef struct mgs_morse_point {
 
 /* A spatial index over the Gaussians' kσ boxes (uniform hash grid, cell ≈ the typical
  * support size; Gaussians spanning many cells sit in a global list). Built once per
- * analysis (O(n log n)); it remembers the boxes of the model it was built from, so it stays
- * valid only for that model's count and for parameters that did not move a support box
- * (rebuild after each optimizer step if exactness matters; it is cheap). */
+ * analysis (O(n log n)); each box is indexed enlarged by 25 % of its half-extent per side,
+ * so the index stays exact while the Gaussians move or grow by less than that. Between
+ * analyses call mgs_morse_index_update after optimizer steps: O(n) check, rebuild only when
+ * the count changed or a support left its indexed box. */
 typedef struct mgs_morse_index mgs_morse_index;
 mgs_status mgs_morse_index_create(const mgs_gaussians *g, const mgs_morse_field_params *p,
                                   mgs_morse_index **out, mgs_error *err);
 void mgs_morse_index_destroy(mgs_morse_index *ix);
 size_t mgs_morse_index_count(const mgs_morse_index *ix); /* the model's n it was built for */
+/* Keeps *ix exact for the current g (same parameters): rebuilds it (replacing *ix) when g's
+ * count differs or a support box escaped its padded box; *rebuilt (may be NULL) says so. */
+mgs_status mgs_morse_index_update(mgs_morse_index **ix, const mgs_gaussians *g, int *rebuilt,
+                                  mgs_error *err);
 
 /* A(x) and ∇A(x) (grad may be NULL). ix may be NULL: brute-force scan over g (p NULL =
  * defaults). With an index, p is the index's. */

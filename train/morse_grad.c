@@ -79,7 +79,13 @@ struct mgs_morse_index {
   size_t npairs;
   uint32_t *global;   /* Gaussians too large for the cells: always visited */
   size_t nglobal;
+  float *box;         /* n*6: the padded box each Gaussian was indexed with (lo, hi);
+                         lo > hi: not indexed (transparent) */
 };
+
+/* Boxes are indexed enlarged by this fraction of their half-extent on each side, so the
+   index stays exact while Gaussians move or grow by less (mgs_morse_index_update). */
+#define INDEX_PAD 0.25
 
 typedef struct pair64 { uint64_t key; uint32_t id; } pair64;
 static int cmp_pair(const void *a, const void *b) {
@@ -136,6 +142,11 @@ mgs_status mgs_morse_index_create(const mgs_gaussians *g, const mgs_morse_field_
   for (size_t i = 0; i < g->n; i++) {
     ok[i] = (uint8_t)support_box(g, i, &p, box + 6 * i, box + 6 * i + 3);
     if (!ok[i]) continue;
+    for (int a = 0; a < 3; a++) {
+      double pad = INDEX_PAD * 0.5 * (box[6 * i + 3 + a] - box[6 * i + a]);
+      box[6 * i + a] -= pad;
+      box[6 * i + 3 + a] += pad;
+    }
     double e = 0;
     for (int a = 0; a < 3; a++) {
       blo[a] = fmin(blo[a], box[6 * i + a]);
@@ -145,7 +156,11 @@ mgs_status mgs_morse_index_create(const mgs_gaussians *g, const mgs_morse_field_
     ext[nok++] = e;
   }
   if (nok == 0) { /* nothing reaches anywhere: an empty index */
+    ix->box = malloc(sizeof(float) * 6 * (g->n ? g->n : 1));
+    for (size_t i = 0; ix->box && i < g->n; i++)
+      for (int a = 0; a < 6; a++) ix->box[6 * i + a] = a < 3 ? 1.0f : 0.0f;
     free(box); free(ext); free(ok);
+    if (!ix->box) { free(ix); return mgs_error_set(err, MGS_ERR_NOMEM, "morse index: out of memory"); }
     *out = ix;
     return MGS_OK;
   }
@@ -202,6 +217,21 @@ mgs_status mgs_morse_index_create(const mgs_gaussians *g, const mgs_morse_field_
   }
   for (size_t k = 0; k < npairs; k++) { ix->keys[k] = pairs[k].key; ix->ids[k] = pairs[k].id; }
   ix->npairs = npairs;
+  ix->box = malloc(sizeof(float) * 6 * (g->n ? g->n : 1));
+  if (!ix->box) {
+    free(pairs); free(box); free(ext); free(ok);
+    mgs_morse_index_destroy(ix);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "morse index: out of memory for %zu boxes", g->n);
+  }
+  for (size_t i = 0; i < g->n; i++)
+    for (int a = 0; a < 6; a++) {
+      /* rounded outward so the float box still contains the double one */
+      double v = box[6 * i + a];
+      float f = (float)v;
+      if (a < 3 && (double)f > v) f = nextafterf(f, -INFINITY);
+      if (a >= 3 && (double)f < v) f = nextafterf(f, INFINITY);
+      ix->box[6 * i + a] = ok[i] ? f : (a < 3 ? 1.0f : 0.0f);
+    }
   free(pairs); free(box); free(ext); free(ok);
   *out = ix;
   return MGS_OK;
@@ -209,6 +239,7 @@ mgs_status mgs_morse_index_create(const mgs_gaussians *g, const mgs_morse_field_
 
 void mgs_morse_index_destroy(mgs_morse_index *ix) {
   if (!ix) return;
+  free(ix->box);
   free(ix->keys);
   free(ix->ids);
   free(ix->global);
@@ -216,6 +247,27 @@ void mgs_morse_index_destroy(mgs_morse_index *ix) {
 }
 
 size_t mgs_morse_index_count(const mgs_morse_index *ix) { return ix ? ix->n : 0; }
+
+mgs_status mgs_morse_index_update(mgs_morse_index **ix, const mgs_gaussians *g, int *rebuilt, mgs_error *err) {
+  if (rebuilt) *rebuilt = 0;
+  if (!ix || !*ix || !g) return mgs_error_set(err, MGS_ERR_ARG, "morse index update: no index or model");
+  int stale = (*ix)->n != g->n;
+  for (size_t i = 0; !stale && i < g->n; i++) {
+    double lo[3], hi[3];
+    if (!support_box(g, i, &(*ix)->p, lo, hi)) continue; /* reaches nothing now: harmless */
+    const float *b = (*ix)->box + 6 * i;
+    for (int a = 0; a < 3; a++)
+      if (!(lo[a] >= (double)b[a] && hi[a] <= (double)b[3 + a])) { stale = 1; break; }
+  }
+  if (!stale) return MGS_OK;
+  mgs_morse_index *fresh = NULL;
+  mgs_status st = mgs_morse_index_create(g, &(*ix)->p, &fresh, err);
+  if (st) return st;
+  mgs_morse_index_destroy(*ix);
+  *ix = fresh;
+  if (rebuilt) *rebuilt = 1;
+  return MGS_OK;
+}
 
 /* The candidates at x: the pairs range of x's cell ([*b, *e) into ids), or an empty range. */
 static void cell_range(const mgs_morse_index *ix, const double x[3], size_t *b, size_t *e) {

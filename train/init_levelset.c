@@ -19,6 +19,7 @@ void mgs_levelset_options_default(mgs_levelset_options *o) {
   o->levels = 1;
   o->delta = 1.0;
   o->flatness = 0.1;
+  o->opacity = 0.1;
   o->seed = 0;
 }
 
@@ -380,6 +381,7 @@ mgs_status mgs_init_levelset(const float *xyz, const float *rgb, size_t n, int s
   if (o.levels < 0 || o.levels > 7) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: levels %d outside [0, 7]", o.levels);
   if (!(o.delta > 0) || o.delta > 16) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: delta %g voxels outside (0, 16]", o.delta);
   if (!(o.flatness > 0) || o.flatness > 1) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: flatness %g outside (0, 1]", o.flatness);
+  if (!(o.opacity > 0) || !(o.opacity < 1)) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: opacity %g outside (0, 1)", o.opacity);
   for (size_t i = 0; i < 3 * n; i++)
     if (!isfinite(xyz[i])) return mgs_error_set(err, MGS_ERR_NUMERIC, "--init levelset: initial point %zu is not finite", i / 3);
   mgs_levelset_info info;
@@ -448,7 +450,7 @@ mgs_status mgs_init_levelset(const float *xyz, const float *rgb, size_t n, int s
   if (st == MGS_OK) st = mgs_knn3_mean_sq(pts, placed, gd2, err);
   if (st == MGS_OK) st = knn_build(&kg, xyz, n, 2 * spacing, err);
   if (st == MGS_OK) {
-    const float op = mgs_logitf(0.1f);
+    const float op = mgs_logitf((float)o.opacity);
     for (size_t i = 0; i < placed; i++) {
       const float *p = pts + 3 * i, *q = pn + 3 * i;
       double nn[3] = {q[0], q[1], q[2]}, l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);

@@ -16,7 +16,7 @@
  *   5. `count` points sampled on them in proportion to area (render/'s area-uniform
  *      sampler), each a Gaussian flat in the tangent plane: shortest axis along the level
  *      set's normal, tangent std-dev the reference's sqrt(mean squared 3-NN distance) of
- *      the samples, normal std-dev `flatness` times that, opacity 0.1 as the reference,
+ *      the samples, normal std-dev `flatness` times that, opacity `opacity` (0.1 as the reference),
  *      colour (SH DC) from the nearest input point. */
 #ifndef MGS_INIT_LEVELSET_H
 #define MGS_INIT_LEVELSET_H
@@ -37,6 +37,8 @@ typedef struct mgs_levelset_options {
   int levels;         /* level sets at kδ, k = −levels..levels (1: three sheets) */
   double delta;       /* spacing δ in voxels (1.0) */
   double flatness;    /* normal std-dev / tangent std-dev (0.1) */
+  double opacity;     /* initial α (0.1, the reference's; see docs/notes-morse-grad.md: flat
+                         Gaussians at 0.1 leave {A = 0.5} patchy at the start) */
   uint64_t seed;      /* sampling seed */
 } mgs_levelset_options;
 void mgs_levelset_options_default(mgs_levelset_options *o);

@@ -531,6 +531,25 @@ static void test_cost(void) {
   CHECK_OK(mgs_morse_index_update(&ix, g, &rebuilt, &err), &err);
   double t4 = cpu_now();
   CHECK(rebuilt == 0);
+  /* closest points of voxels near the surface {A = 0.3} (found by marching along x) */
+  int found = 0, tried = 0;
+  double tcp = 0;
+  for (int t = 0; t < 400 && found < 200; t++) {
+    double x[3] = {-9.5, 10 * (2 * mgs_rng_uniform(&r) - 1), 10 * (2 * mgs_rng_uniform(&r) - 1)}, A = 0, prev = 0;
+    for (; x[0] < 9.5; x[0] += 0.02) {
+      mgs_morse_alpha_at(g, ix, NULL, x, &A, NULL, &err);
+      if (prev < 0.3 && A >= 0.3) break;
+      prev = A;
+    }
+    if (x[0] >= 9.5) continue;
+    x[0] -= 0.05; /* a voxel outside, near the surface */
+    double c[3], d;
+    tried++;
+    double c0 = cpu_now();
+    if (mgs_morse_closest_point(g, ix, NULL, x, 0.3f, c, &d, &err) == MGS_OK) found++;
+    tcp += cpu_now() - c0;
+  }
+  fprintf(stderr, "  closest point: %d of %d voxels, %.1f us each (CPU)\n", found, tried, 1e6 * tcp / (tried ? tried : 1));
   fprintf(stderr, "  cost (CPU), 50k Gaussians: index build %.1f ms, update check %.1f ms, %.2f us per indexed call (%.1f contributors), brute force %.2f ms per call\n",
           1e3 * (t1 - t0), 1e3 * (t4 - t3), 1e6 * (t2 - t1) / calls, (double)contrib / calls, 1e3 * (t3 - t2) / 20);
   CHECK(t2 - t1 < t3 - t2 + 1.0); /* sanity only; timings are reported, not asserted */

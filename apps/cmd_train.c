@@ -14,6 +14,26 @@
 #include "core/mgs_core.h"
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "train/mgs_init_levelset.h"
+#include "train/mgs_term_normal.h"
+
+/* ---- MorseGS normal loss and level-set init (issue 14; train/mgs_term_normal.h,
+ * train/mgs_init_levelset.h): parsed here, used in mgs_cmd_train_run. ---- */
+static double g_normal_loss = 0; /* γ of --normal-loss (0: off) */
+static int morse_grad_parse_normal(const char *arg) {
+  g_normal_loss = 0.02; /* the default γ (seed range 0.01-0.05) */
+  if (arg) {
+    char *end;
+    double v = strtod(arg, &end);
+    if (!*arg || *end || !(v > 0) || v > 1000) {
+      fprintf(stderr, "morsegs train: --normal-loss needs a weight in (0, 1000] (got '%s')\n", arg);
+      return 0;
+    }
+    g_normal_loss = v;
+  }
+  return 1;
+}
+/* ---- end of the normal-loss / level-set block ---- */
 
 static volatile sig_atomic_t g_stop = 0;
 /* Topology-GS flags (apps/train_topogs_flags.c): parsed before the option table */
@@ -36,8 +56,12 @@ static void usage(FILE *f) {
     "      --test-every N      COLMAP/nerfstudio: every Nth view is a test view (8)\n"
     "      --seed S            random seed (0)\n"
     "      --strategy adc      density control: adc (reference) or none\n"
-    "      --init sfm|random|lpvi  initial Gaussians: dataset points (falls back to random), random, or\n"
-    "                          LPVI over the dataset points (Topology-GS, below)\n"
+    "      --init sfm|random|levelset|lpvi  initial Gaussians: dataset points (falls back to random),\n"
+    "                          random, MorseGS level sets of the dataset points' distance field (flat,\n"
+    "                          tangent), or LPVI over the dataset points (Topology-GS, below)\n"
+    "      --normal-loss[=G]   MorseGS normal consistency loss, weight G (0.02), from iteration 3000\n"
+    "                          (half the run if shorter than 6000), SDF rebuilt from the model every\n"
+    "                          500 iterations (resolution 128 of the diagonal, tau 0.5)\n"
     "      --random-points N   Gaussians of the random init (100000)\n"
     "      --densify-from N    (500)   --densify-until N (15000)   --densify-every N (100)\n"
     "      --position-lr-max-steps N  length of the position learning-rate decay (30000, the\n"
@@ -61,8 +85,7 @@ static void usage(FILE *f) {
     "                          (random chunk order, random within a chunk; default random as the reference)\n"
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "      --quiet             no progress bar\n"
-    "  Not available yet (later issues): --strategy morse, --topo-loss, --normal-loss,\n"
-    "  --init levelset.\n");
+    "  Not available yet: --strategy morse, --topo-loss.\n");
   mgs_topogs_usage(f);
 }
 
@@ -232,7 +255,13 @@ int mgs_cmd_train(int argc, char **argv) {
       case O_QUIET: quiet = 1; break;
       case O_TOPO: fprintf(stderr, "morsegs train: --topo-loss is not available yet (MorseGS persistence loss comes in a later issue)\n"); return 2;
       case O_PERS: fprintf(stderr, "morsegs train: --pers-loss is not available yet (Topology-GS PersLoss comes in a later issue)\n"); return 2;
-      case O_NORMAL: fprintf(stderr, "morsegs train: --normal-loss is not available yet (comes in a later issue)\n"); return 2;
+      case O_NORMAL: { /* "--normal-loss=G", "--normal-loss G" or a bare "--normal-loss" */
+        const char *a = optarg;
+        char *e = NULL;
+        if (!a && optind < argc && argv[optind][0] && (strtod(argv[optind], &e), e && !*e)) a = argv[optind++];
+        if (!morse_grad_parse_normal(a)) return 2;
+        break;
+      }
       case O_VIS:
         if (!strcmp(optarg, "auto")) o.visibility = -1;
         else if (!strcmp(optarg, "on")) o.visibility = 1;
@@ -296,6 +325,7 @@ int mgs_cmd_train(int argc, char **argv) {
       if (!given[O_FREEZE] && (v = mgs_settings_get(&prev, "freeze"))) o.freeze = !strcmp(v, "True");
       if (!given[O_INIT] && (v = mgs_settings_get(&prev, "init"))) init = v; /* for the record only */
       mgs_topogs_flags_restore(&g_topogs, &prev);
+      if (!given[O_NORMAL] && (v = mgs_settings_get(&prev, "normal_loss"))) g_normal_loss = atof(v);
     }
     free(cfg);
   }
@@ -314,8 +344,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   mgs_train_options o = *op;
   if (!strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: --strategy morse is not available yet (comes in a later issue)\n"); return 2; }
   if (strcmp(strategy, "adc") && strcmp(strategy, "none")) { fprintf(stderr, "morsegs train: unknown --strategy '%s' (adc, none)\n", strategy); return 2; }
-  if (!strcmp(init, "levelset")) { fprintf(stderr, "morsegs train: --init %s is not available yet (comes in a later issue)\n", init); return 2; }
-  if (strcmp(init, "sfm") && strcmp(init, "random") && strcmp(init, "lpvi")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random, lpvi)\n", init); return 2; }
+  if (strcmp(init, "sfm") && strcmp(init, "random") && strcmp(init, "lpvi") && strcmp(init, "levelset")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random, levelset, lpvi)\n", init); return 2; }
   int saves[64], n_saves = 0;
   for (const char *p = save_at; *p && n_saves < 64;) {
     char *end;
@@ -378,6 +407,17 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     if (!g0 || (st = mgs_gaussians_append(g0, 1, &first, &err))) { mgs_gaussians_destroy(g0); if (!st) st = MGS_ERR_NOMEM; goto done; }
   } else if (!strcmp(init, "lpvi")) {
     st = mgs_topogs_init_model(&g_topogs, ds, o.sh_degree, seed, random_points, &g0, &err);
+  } else if (!strcmp(init, "levelset")) { /* MorseGS level-set init (train/mgs_init_levelset.h) */
+    if (!ds->init_points || ds->init_points->n == 0) {
+      st = mgs_error_set(&err, MGS_ERR_ARG, "--init levelset: %s has no initial points (COLMAP points3D, points3d.ply)", data);
+    } else {
+      mgs_levelset_options lo;
+      mgs_levelset_options_default(&lo);
+      lo.seed = seed;
+      mgs_levelset_info li;
+      st = mgs_init_levelset(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &lo, &g0, &li, &err);
+      if (!st) mgs_info("level-set init: %zu Gaussians from %zu points (voxel %.4g, delta %.4g, %.2f s)", g0->n, ds->init_points->n, li.voxel_size, li.delta, li.seconds);
+    }
   } else if (!strcmp(init, "sfm") && ds->init_points && ds->init_points->n > 0) {
     st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &g0, &err);
   } else {
@@ -400,6 +440,14 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   if (!strcmp(strategy, "adc")) strat = mgs_strategy_adc_create(&o.adc);
   if ((st = mgs_trainer_create(ds, &o, g0, strat, &t, &err))) goto done;
   if ((st = mgs_topogs_add_terms(&g_topogs, t, &err))) goto done;
+  if (g_normal_loss > 0) { /* MorseGS normal loss (train/mgs_term_normal.h) */
+    mgs_normal_options no;
+    mgs_normal_options_default(&no);
+    no.gamma = g_normal_loss;
+    if (o.iterations < 2 * no.from_iter) no.from_iter = o.iterations / 2 > 0 ? o.iterations / 2 : 1; /* short runs: the second half */
+    mgs_term *nt = NULL;
+    if ((st = mgs_term_normal_create(&no, &nt, NULL, &err)) || (st = mgs_trainer_add_term(t, nt, &err))) goto done;
+  }
   if (resume) {
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
@@ -429,6 +477,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_seti(&s, "seed", (long long)seed);
     mgs_settings_set(&s, "strategy", strategy, 1);
     mgs_settings_set(&s, "init", init_used, 1);
+    mgs_settings_setf(&s, "normal_loss", g_normal_loss);
     mgs_settings_seti(&s, "random_points", random_points);
     mgs_settings_setf(&s, "lambda_dssim", o.lambda_dssim);
     mgs_settings_setf(&s, "position_lr_init", o.lr_mean_init);

@@ -32,7 +32,7 @@ for f in build-fuzz/tests/fuzz/fuzz_*; do
   "$f" -max_total_time="$secs" -rss_limit_mb=4096 -timeout=10 -artifact_prefix="build-fuzz/$name-" "$work" \
     > "build-fuzz/$name.log" 2>&1 || { tail -50 "build-fuzz/$name.log"; echo "fuzz: $name FAILED"; exit 1; }
   # libFuzzer's last status line: "#N DONE cov: ... corp: ..."
-  stat=$(grep -E "^#[0-9]+" "build-fuzz/$name.log" | tail -1 | awk '{print $1, $3, $4, $5, $6, $7}')
+  stat=$(grep -E "^#[0-9]+" "build-fuzz/$name.log" | tail -1 | awk '{print $1, "execs,", $3, $4, $5, $6, $7, $8}')
   echo "fuzz: $name clean after ${secs}s: ${stat}"
   ran=$((ran+1))
 done

@@ -149,7 +149,7 @@ rm -rf "$ref" "$run"
 t0=$(date +%s.%N)
 train -o "$ref" --iters "$iters" > "$work/ref.log" 2>&1 || { cat "$work/ref.log"; exit 1; }
 t1=$(date +%s.%N)
-dur=$(echo "$t1 - $t0" | bc)
+dur=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", b - a }')
 final=point_cloud/iteration_$iters/point_cloud.ply
 RANDOM=$seed
 killed=0; resumes=0; fresh=0; in_write=0; no_ckpt_window=0; starts=0
@@ -163,7 +163,7 @@ while [ $killed -lt "$kills" ]; do
   "$cli" train "$ds" -o "$run" --iters "$iters" "${args[@]}" "${common[@]}" > "$work/part.log" 2>&1 &
   pid=$!
   # a random moment within the reference's run time
-  delay=$(echo "scale=3; $dur * $RANDOM / 32768" | bc)
+  delay=$(awk -v d="$dur" -v r="$RANDOM" 'BEGIN { printf "%.3f", d * r / 32768 }')
   sleep "$delay"
   if kill -9 $pid 2>/dev/null; then
     wait $pid 2>/dev/null

@@ -83,7 +83,7 @@ extern "C" mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_
   const std::string &chosen = idx.names[(size_t)which];
   if (idx.types[(size_t)which] != float_type)  // refused before OpenVDB reads a tree of another type
     return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "%s: grid '%s' holds %s values, not float (a scalar float grid is needed)",
-                         path, chosen.c_str(), idx.types[(size_t)which].c_str());
+                         path, chosen.c_str(), mgs_vdb_detail::value_type_of(idx.types[(size_t)which]).c_str());
   GridBase::Ptr base;
   if ((st = mgs_vdb_detail::load_vdb(idx, which, nullptr, &base, err)) != MGS_OK) return st;
   idx.bytes.clear();

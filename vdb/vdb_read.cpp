@@ -171,9 +171,16 @@ mgs_status check_vdb(const char *path, vdb_index *idx, mgs_error *err) {
   return check_header(c, idx);
 }
 
+std::string value_type_of(const std::string &tree_type) {
+  // "Tree_vec3s_5_4_3" -> "vec3s" (what OpenVDB's valueType() says); others unchanged.
+  if (tree_type.compare(0, 5, "Tree_") != 0) return tree_type;
+  const size_t end = tree_type.find('_', 5);
+  return tree_type.substr(5, end == std::string::npos ? std::string::npos : end - 5);
+}
+
 std::string grid_list(const vdb_index &idx) {
   std::string s;
-  for (size_t i = 0; i < idx.names.size(); i++) s += (i ? ", " : "") + idx.names[i] + " (" + idx.types[i] + ")";
+  for (size_t i = 0; i < idx.names.size(); i++) s += (i ? ", " : "") + idx.names[i] + " (" + value_type_of(idx.types[i]) + ")";
   return s.empty() ? "none" : s;
 }
 

@@ -39,7 +39,9 @@ mgs_status check_vdb(const char *path, vdb_index *idx, mgs_error *err);
 // Step 2: the file metadata and grid `which` (or none when which < 0) through OpenVDB.
 mgs_status load_vdb(const vdb_index &idx, int which, openvdb::MetaMap::Ptr *meta, openvdb::GridBase::Ptr *grid,
                     mgs_error *err);
-// "name (type), ..." for messages.
+// "name (value type), ..." for messages.
 std::string grid_list(const vdb_index &idx);
+// A descriptor's tree type as OpenVDB's valueType() names it ("Tree_vec3s_5_4_3" -> "vec3s").
+std::string value_type_of(const std::string &tree_type);
 }  // namespace mgs_vdb_detail
 #endif

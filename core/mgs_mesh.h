@@ -22,6 +22,9 @@ void mgs_mesh_destroy(mgs_mesh *m);
 /* Fails (MGS_ERR_FORMAT, naming the file) on an empty mesh, indices out of range or
  * non-finite vertices. Vertices at identical positions are welded (OBJ splits them by
  * normal), so boundary counts see the real topology; vertex order is not preserved.
+ * Header counts are checked against the file size first, and assimp runs in a forked
+ * child process under an address-space cap, so a corrupt file is an error, never a crash
+ * of the caller (core/mesh_check.h, mesh_assimp.c).
  * Not for concurrent use from several threads (assimp's logger is process-global). */
 mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err);
 /* Binary PLY, OBJ or OFF by extension; refuses non-finite vertices and bad indices. */

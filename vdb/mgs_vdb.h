@@ -263,7 +263,10 @@ mgs_status mgs_vdb_write(const char *path, const mgs_vdb_grid *const *grids, siz
                          const mgs_vdb_points *const *points, size_t npoints,
                          const mgs_vdb_file_meta *meta, mgs_error *err);
 /* Reads one float grid. name NULL: the first level set, else the first float grid.
- * Clear errors for: missing file, not a .vdb, no grid of that name, non-float grid. */
+ * Clear errors for: missing file, not a .vdb, no grid of that name, non-float grid,
+ * truncated or corrupt data, an unusable transform. Every .vdb read validates the header
+ * against the file size and parses in a forked child under a memory cap (vdb_read.hpp):
+ * a hostile file is an error, never a crash or an unbounded allocation. */
 mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_vdb_grid **out,
                              mgs_error *err);
 /* File metadata written by mgs_vdb_write (fields left default when absent). */

@@ -37,10 +37,10 @@ void mgs_morse_options_default(mgs_morse_options *o) {
 }
 
 mgs_status mgs_morse_options_check(const mgs_morse_options *o, int iterations, mgs_error *err) {
-  (void)iterations;
 #define RANGE(cond, ...) if (!(cond)) return mgs_error_set(err, MGS_ERR_ARG, __VA_ARGS__)
   RANGE(o->every >= 1 && o->every <= 1000000, "--morse-every must be in 1..1000000 (got %d)", o->every);
   RANGE(o->warmup >= 1, "--morse-warmup must be >= 1 (got %d)", o->warmup);
+  RANGE(iterations <= 0 || o->warmup < iterations, "--morse-warmup (%d) must be below --iters (%d): no analysis would run", o->warmup, iterations);
   RANGE(o->until >= o->warmup, "--morse-until must be >= --morse-warmup (%d; got %d)", o->warmup, o->until);
   RANGE(o->resolution >= 16 && o->resolution <= 2048, "--morse-resolution must be in 16..2048 (got %d)", o->resolution);
   RANGE(o->tau > 0 && o->tau < 1, "--morse-tau must be in (0, 1) (got %g)", o->tau);

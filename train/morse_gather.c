@@ -22,6 +22,10 @@ static int cmp_hit(const void *a, const void *b) {
   if (x->pt != y->pt) return x->pt < y->pt ? -1 : 1;
   return x->g < y->g ? -1 : (x->g > y->g);
 }
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : (x > y);
+}
 static int64_t bin_key(int64_t i, int64_t j, int64_t k) {
   return ((i + (1 << 20)) << 42) | ((j + (1 << 20)) << 21) | (k + (1 << 20));
 }
@@ -55,10 +59,7 @@ mgs_status morse_gather_build(const mgs_gaussians *g, const double *pts, size_t 
     const float *l = g->log_scale + 3 * i;
     rad[s] = k_sigma * exp(fmax(l[0], fmax(l[1], l[2])));
   }
-  /* median by partial sort (small) */
-  for (size_t a = 0; a <= ns / 2; a++)
-    for (size_t b = a + 1; b < ns; b++)
-      if (rad[b] < rad[a]) { double t = rad[a]; rad[a] = rad[b]; rad[b] = t; }
+  qsort(rad, ns, sizeof(double), cmp_double);
   double cell = 2 * rad[ns / 2];
   free(rad);
   if (!(cell > 0) || !isfinite(cell)) cell = 1e-3;

@@ -64,7 +64,8 @@ int main(void) {
 
   /* bad input: one-line errors, exit 2, no RUN */
   const char *bads[] = {"--topo-loss --eps-sig 0.9", "--topo-loss --beta -1", "--strategy morse --morse-every 0",
-                        "--topo-loss --morse-resolution 2048", "--spawn gaps", "--preset nope", "--topo-loss --topo-dims 5"};
+                        "--topo-loss --morse-resolution 2048 --morse-warmup 2", "--topo-loss --morse-warmup 10",
+                        "--spawn gaps", "--preset nope", "--topo-loss --topo-dims 5"};
   for (size_t k = 0; k < sizeof bads / sizeof *bads; k++) {
     CHECK(sh("%s train %s -o %s %s --iters 5 --quiet 2> %s.err", cli, data, bad, bads[k], bad) == 2);
     CHECK(!mgs_path_exists(bad));

@@ -112,7 +112,8 @@ const mgs_morse_options *mgs_morse_ctx_options(const mgs_morse_ctx *c);
 /* Is `iteration` an analysis iteration? */
 int mgs_morse_is_analysis_iteration(const mgs_morse_ctx *c, int iteration);
 /* Runs the analysis of `iteration` on g unless it already ran for it (then MGS_OK at once).
- * *ran (may be NULL) = 1 if this call ran it. */
+ * *ran (may be NULL) = 1 if this call ran it. A failed analysis is logged as a warning and
+ * leaves an empty result (nothing acts on it until the next one); training goes on. */
 mgs_status mgs_morse_ctx_update(mgs_morse_ctx *c, const mgs_gaussians *g, int iteration,
                                 int *ran, mgs_error *err);
 /* The same, now, whatever the schedule (tools and tests). */

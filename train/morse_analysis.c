@@ -119,7 +119,19 @@ mgs_status mgs_morse_ctx_update(mgs_morse_ctx *c, const mgs_gaussians *g, int it
   if (ran) *ran = 0;
   if (!mgs_morse_is_analysis_iteration(c, it) || c->r.iteration == it) return MGS_OK;
   if (ran) *ran = 1;
-  return mgs_morse_analyze(c, g, it, err);
+  mgs_error e2;
+  mgs_error_clear(&e2);
+  mgs_status st = mgs_morse_analyze(c, g, it, &e2);
+  if (st == MGS_OK) return MGS_OK;
+  /* one failed analysis (a grid over budget, a broken band) must not end a long run:
+     nothing acts on it (no pairs) until the next one */
+  mgs_warn("Morse analysis at iteration %d skipped: %s", it, e2.msg);
+  drop_transient(c);
+  free(c->r.pairs);
+  memset(&c->r, 0, sizeof c->r);
+  c->r.iteration = it;
+  (void)err;
+  return MGS_OK;
 }
 
 /* ---- closest points ------------------------------------------------------------- */

@@ -180,6 +180,18 @@ static void cam_range(void *vp, size_t b, size_t e) {
 /* ---- the analysis ----------------------------------------------------------------- */
 
 static mgs_status push_row(mgs_morse_ctx *c, mgs_error *err) {
+  /* the rows before this one are complete (spawn counts and the loss come in their own
+     iteration): written now, so a long run's file grows as it goes */
+  if (c->csv_path) {
+    mgs_status st = mgs_morse_ctx_flush_csv(c, err);
+    if (st) return st;
+  }
+  const mgs_morse_result *res = &c->r;
+  mgs_info("morse analysis @%d: %zu Gaussians, voxel %.4g, band %.4g; betti(0) %d %d %d, above eps %d %d %d; %zu pairs; "
+           "%.2f s (alpha %.2f, sdf %.2f, persistence %.2f, closest %.2f, components %.2f)",
+           res->iteration, res->gaussians_used, res->voxel_size, res->half_width, res->betti0[0], res->betti0[1], res->betti0[2],
+           res->betti_eps[0], res->betti_eps[1], res->betti_eps[2], res->n, res->seconds[5], res->seconds[0], res->seconds[1],
+           res->seconds[2], res->seconds[3], res->seconds[4]);
   morse_row *r = realloc(c->rows, (c->n_rows + 1) * sizeof *r);
   if (!r) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
   c->rows = r;

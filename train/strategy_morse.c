@@ -362,9 +362,8 @@ static mgs_status ms_post(void *self, mgs_strategy_step *s, mgs_error *err) {
   m->total_pruned += pruned;
   mgs_morse_ctx_note_spawn(c, spawned, pruned);
   const mgs_morse_result *r = &c->r;
-  mgs_info("morse @%d: betti(0) %d %d %d, above eps %d %d %d, %zu pairs; spawned %zu, pruned %zu; %zu Gaussians; %.2f s",
-           it, r->betti0[0], r->betti0[1], r->betti0[2], r->betti_eps[0], r->betti_eps[1], r->betti_eps[2], r->n, spawned,
-           pruned, g->n, r->seconds[5]);
+  mgs_info("morse @%d: spawned %zu, pruned %zu beside betti(0) %d %d %d (above eps %d %d %d); %zu Gaussians", it, spawned,
+           pruned, r->betti0[0], r->betti0[1], r->betti0[2], r->betti_eps[0], r->betti_eps[1], r->betti_eps[2], g->n);
   return MGS_OK;
 }
 

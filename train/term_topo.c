@@ -16,12 +16,13 @@
 #include "train/mgs_morse_grad.h"
 #include "train/mgs_term.h"
 #include "topo/mgs_topo_grad.h"
+#include "core/mgs_parallel.h"
 
 typedef struct topo_term {
   mgs_morse_ctx *ctx;
   int owns_state;
   /* candidate Gaussians per bar end; rebuilt when the analysis, the count or the
-     25-iteration tick changes (their 4σ supports: a superset of what the 3σ evaluation
+     25-iteration tick changes (their 3.5σ supports: a superset of what the 3σ evaluation
      reads, so a rebuild at another iteration gives the same sums) */
   morse_gather gat;
   int built_analysis, built_it;
@@ -52,12 +53,66 @@ static mgs_status topo_prepare(topo_term *t, const mgs_gaussians *g, int it, mgs
     if (mp->has_cb) { memcpy(t->pts + 3 * t->n_ends, mp->cb, 3 * sizeof(double)); t->end_pair[t->n_ends++] = 2 * k; }
     if (mp->has_cd) { memcpy(t->pts + 3 * t->n_ends, mp->cd, 3 * sizeof(double)); t->end_pair[t->n_ends++] = 2 * k + 1; }
   }
-  mgs_status st = morse_gather_build(g, t->pts, t->n_ends, 4.0, &t->gat, err);
+  mgs_status st = morse_gather_build(g, t->pts, t->n_ends, 3.5, &t->gat, err);
   if (st) return st;
   t->built_analysis = r->iteration;
   t->built_n = g->n;
   t->built_it = it;
   return MGS_OK;
+}
+
+/* A model view of rows [s, s + n) of m (no ownership). */
+static mgs_gaussians slice(const mgs_gaussians *m, size_t s, size_t n) {
+  mgs_gaussians v = *m;
+  v.n = v.capacity = n;
+  v.mean += 3 * s; v.log_scale += 3 * s; v.rot += 4 * s; v.opacity += s;
+  v.sh_dc += 3 * s; v.sh_rest += (size_t)MGS_SH_REST_MAX * s;
+  return v;
+}
+
+/* The candidates of every end, in order, into t->loc (the field's groups only). */
+static mgs_status gather_all(topo_term *t, const mgs_gaussians *g, size_t total, mgs_error *err) {
+  mgs_status st = MGS_OK;
+  if (t->loc->capacity < total) st = mgs_gaussians_reserve(t->loc, total, err);
+  if (st == MGS_OK && t->locg->capacity < total) st = mgs_gaussians_reserve(t->locg, total, err);
+  if (st) return st;
+  t->loc->n = t->locg->n = total;
+  mgs_gaussians *L = t->loc;
+  for (size_t j = 0; j < total; j++) {
+    size_t i = t->gat.idx[j];
+    for (int q = 0; q < 3; q++) { L->mean[3 * j + q] = g->mean[3 * i + q]; L->log_scale[3 * j + q] = g->log_scale[3 * i + q]; }
+    for (int q = 0; q < 4; q++) L->rot[4 * j + q] = g->rot[4 * i + q];
+    L->opacity[j] = g->opacity[i];
+  }
+  return MGS_OK;
+}
+
+typedef struct end_job {
+  topo_term *t;
+  float tau;
+  double *aval;          /* out: A at each end's c */
+  const double *weight;  /* grad pass: beta * dL/d(end) */
+  mgs_status *st;
+} end_job;
+
+static void end_value(void *vp, size_t b, size_t e) {
+  end_job *j = vp;
+  for (size_t q = b; q < e; q++) {
+    size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
+    mgs_gaussians v = slice(j->t->loc, s, cnt);
+    j->aval[q] = 0;
+    if (cnt) j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, 0, NULL, &j->aval[q], NULL);
+  }
+}
+
+static void end_grad(void *vp, size_t b, size_t e) {
+  end_job *j = vp;
+  for (size_t q = b; q < e; q++) {
+    size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
+    if (j->weight[q] == 0 || cnt == 0) continue;
+    mgs_gaussians v = slice(j->t->loc, s, cnt), vg = slice(j->t->locg, s, cnt);
+    j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, j->weight[q], &vg, NULL, NULL);
+  }
 }
 
 /* Loss (unweighted) on the current model; with grad, adds beta * dL/dθ into it. */
@@ -84,14 +139,24 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
     const mgs_pair *p = &r->pairs[k].p;
     if (!isfinite(p->death) || !(p->death - p->birth < eps_sig)) d.pairs[k].dim = 3;
   }
+  /* every end's candidate Gaussians side by side, gathered once per iteration; each end
+     reads (and writes its gradient into) its own slice, so ends run in parallel */
+  size_t total = t->gat.start[t->n_ends];
+  st = gather_all(t, g, total, err);
+  double *aval = malloc((t->n_ends + 1) * sizeof(double));
+  mgs_status *est = calloc(t->n_ends + 1, sizeof(mgs_status));
+  if (st == MGS_OK && (!aval || !est)) st = mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  end_job job = {t, (float)o->tau, aval, NULL, est};
+  if (st == MGS_OK) {
+    mgs_parallel_for(0, t->n_ends, 8, end_value, &job);
+    for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
+      if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the field at a bar end is not finite");
+  }
   for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++) {
-    size_t k = t->end_pair[e] / 2, s = t->gat.start[e], cnt = t->gat.start[e + 1] - s;
+    size_t k = t->end_pair[e] / 2;
     const mgs_morse_pair *mp = &r->pairs[k];
-    double a = 0;
-    st = morse_gather_rows(g, t->gat.idx + s, cnt, t->loc, err);
-    if (st == MGS_OK) st = mgs_morse_sdf_point_grad(t->loc, t->pts + 3 * e, (float)o->tau, 0, NULL, &a, err);
-    if (t->end_pair[e] & 1) d.pairs[k].death = mp->p.death - (a - mp->ad) / mp->gd;
-    else d.pairs[k].birth = mp->p.birth - (a - mp->ab) / mp->gb;
+    if (t->end_pair[e] & 1) d.pairs[k].death = mp->p.death - (aval[e] - mp->ad) / mp->gd;
+    else d.pairs[k].birth = mp->p.birth - (aval[e] - mp->ab) / mp->gb;
   }
   if (st == MGS_OK) {
     mgs_topo_loss_kind kind = o->topo == MGS_MORSE_TOPO_LITERAL ? MGS_TOPO_LOSS_LITERAL : MGS_TOPO_LOSS_ELIMINATE;
@@ -100,19 +165,21 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
       for (size_t k = 0; k < r->n; k++)
         if (d.pairs[k].dim < 3 && ((o->dims >> d.pairs[k].dim) & 1u)) *short_pers += fabs(d.pairs[k].death - d.pairs[k].birth);
   }
-  for (size_t e = 0; grad && e < t->n_ends && st == MGS_OK; e++) {
-    size_t k = t->end_pair[e] / 2, s = t->gat.start[e], cnt = t->gat.start[e + 1] - s;
-    double w = beta * ((t->end_pair[e] & 1) ? dld[k] : dlb[k]);
-    if (w == 0 || cnt == 0) continue;
-    st = morse_gather_rows(g, t->gat.idx + s, cnt, t->loc, err);
-    if (st == MGS_OK && t->locg->capacity < cnt) st = mgs_gaussians_reserve(t->locg, cnt, err);
-    if (st) break;
-    t->locg->n = cnt;
+  if (grad && st == MGS_OK) {
+    double *w = aval; /* reused: the weight of each end */
+    for (size_t e = 0; e < t->n_ends; e++) {
+      size_t k = t->end_pair[e] / 2;
+      w[e] = beta * ((t->end_pair[e] & 1) ? dld[k] : dlb[k]);
+    }
     for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++)
-      memset(mgs_gaussians_group(t->locg, (mgs_param_group)gr), 0, cnt * (size_t)mgs_param_dim((mgs_param_group)gr) * sizeof(float));
-    st = mgs_morse_sdf_point_grad(t->loc, t->pts + 3 * e, (float)o->tau, w, t->locg, NULL, err);
-    for (size_t j = 0; j < cnt && st == MGS_OK; j++) {
-      size_t i = t->gat.idx[s + j];
+      memset(mgs_gaussians_group(t->locg, (mgs_param_group)gr), 0, total * (size_t)mgs_param_dim((mgs_param_group)gr) * sizeof(float));
+    job.weight = w;
+    mgs_parallel_for(0, t->n_ends, 8, end_grad, &job);
+    for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
+      if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the gradient at a bar end is not finite");
+    /* scatter, in a fixed order */
+    for (size_t j = 0; j < total && st == MGS_OK; j++) {
+      size_t i = t->gat.idx[j];
       for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++) {
         int dim = mgs_param_dim((mgs_param_group)gr);
         const float *src = mgs_gaussians_group(t->locg, (mgs_param_group)gr) + j * (size_t)dim;
@@ -121,6 +188,7 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
       }
     }
   }
+  free(aval); free(est);
   free(d.pairs); free(dlb); free(dld);
   return st;
 }

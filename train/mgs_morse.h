@@ -119,8 +119,9 @@ mgs_status mgs_morse_ctx_update(mgs_morse_ctx *c, const mgs_gaussians *g, int it
 /* The same, now, whatever the schedule (tools and tests). */
 mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int iteration, mgs_error *err);
 const mgs_morse_result *mgs_morse_ctx_result(const mgs_morse_ctx *c);
-/* The last analysis' grids (NULL before the first or after a resume: grids are not
- * checkpointed) — the SDF for sampling (mgs_vdb_sample / _gradient), the α-field. */
+/* The last analysis' grids, valid until the next analysis — the SDF for sampling
+ * (mgs_vdb_sample / _gradient; checkpointed, so the same after --resume) and the α-field
+ * (NULL after a resume). */
 const mgs_vdb_grid *mgs_morse_ctx_sdf(const mgs_morse_ctx *c);
 const mgs_vdb_grid *mgs_morse_ctx_alpha(const mgs_morse_ctx *c);
 /* Per-Gaussian camera counts of the last analysis (index into the analysed model; NULL
@@ -138,7 +139,7 @@ mgs_status mgs_morse_ctx_flush_csv(mgs_morse_ctx *c, mgs_error *err);
 double mgs_morse_ctx_seconds(const mgs_morse_ctx *c);
 size_t mgs_morse_ctx_analyses(const mgs_morse_ctx *c);
 
-/* Checkpoint: the last result (pairs, closest points) and the counters. */
+/* Checkpoint: the last result (pairs, closest points), its SDF grid and the counters. */
 mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err);
 mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err);
 

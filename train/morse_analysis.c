@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include "train/morse_internal.h"
 #include "train/mgs_morse_grad.h"
 #include "topo/mgs_persistence.h"
@@ -399,6 +400,56 @@ mgs_status mgs_morse_ctx_flush_csv(mgs_morse_ctx *c, mgs_error *err) {
 /* ---- checkpoint --------------------------------------------------------------------- */
 
 #define CTX_MAGIC 0x4d4f5253u /* "MORS" */
+
+/* The last SDF grid goes into checkpoints too: terms that read it between analyses (the
+ * normal loss's ∇d) must see the same grid after --resume. OpenVDB serializes to files, so
+ * it passes through a temporary .vdb (u64 size + bytes; size 0 = no grid). */
+static char *tmp_vdb_path(void) {
+  const char *dir = getenv("TMPDIR");
+  char *p = malloc(4096);
+  if (!p) return NULL;
+  snprintf(p, 4096, "%s/mgs_morse_XXXXXX", dir && *dir ? dir : "/tmp");
+  int fd = mkstemp(p);
+  if (fd < 0) { free(p); return NULL; }
+  close(fd);
+  return p;
+}
+
+static mgs_status save_sdf(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {
+  uint64_t size = 0;
+  if (!c->sdf) return fwrite(&size, 8, 1, f) == 1 ? MGS_OK : mgs_error_set(err, MGS_ERR_IO, "morse: cannot write the checkpoint");
+  char *path = tmp_vdb_path(), *bytes = NULL;
+  if (!path) return mgs_error_set(err, MGS_ERR_IO, "morse: cannot create a temporary file for the SDF grid");
+  size_t len = 0;
+  const mgs_vdb_grid *gr[1] = {c->sdf};
+  mgs_status st = mgs_vdb_write(path, gr, 1, NULL, 0, NULL, err);
+  if (st == MGS_OK) st = mgs_read_file(path, &bytes, &len, err);
+  remove(path);
+  free(path);
+  if (st) return st;
+  size = len;
+  int ok = fwrite(&size, 8, 1, f) == 1 && fwrite(bytes, 1, len, f) == len;
+  free(bytes);
+  return ok ? MGS_OK : mgs_error_set(err, MGS_ERR_IO, "morse: cannot write the SDF grid to the checkpoint");
+}
+
+static mgs_status load_sdf(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
+  uint64_t size = 0;
+  if (fread(&size, 8, 1, f) != 1 || size > ((uint64_t)1 << 40))
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the Morse analysis state (SDF grid)");
+  if (size == 0) return MGS_OK;
+  char *bytes = malloc(size), *path = NULL;
+  if (!bytes) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory (SDF grid)");
+  mgs_status st = MGS_OK;
+  if (fread(bytes, 1, size, f) != size) st = mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the Morse SDF grid");
+  if (st == MGS_OK && !(path = tmp_vdb_path())) st = mgs_error_set(err, MGS_ERR_IO, "morse: cannot create a temporary file for the SDF grid");
+  if (st == MGS_OK) st = mgs_write_file_atomic(path, bytes, size, err);
+  free(bytes);
+  if (st == MGS_OK) st = mgs_vdb_read_grid(path, "sdf", &c->sdf, err);
+  if (path) remove(path);
+  free(path);
+  return st;
+}
 mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   uint32_t magic = CTX_MAGIC;
   uint64_t n = c->r.n, analyses = c->analyses;
@@ -408,7 +459,8 @@ mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   r.pairs = NULL;
   ok = ok && fwrite(&r, sizeof r, 1, f) == 1 && fwrite(&n, 8, 1, f) == 1;
   if (n) ok = ok && fwrite(c->r.pairs, sizeof(mgs_morse_pair), n, f) == n;
-  return ok ? MGS_OK : mgs_error_set(err, MGS_ERR_IO, "morse: cannot write the analysis state to the checkpoint");
+  if (!ok) return mgs_error_set(err, MGS_ERR_IO, "morse: cannot write the analysis state to the checkpoint");
+  return save_sdf(c, f, err);
 }
 
 mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
@@ -429,5 +481,5 @@ mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   c->r.n = n;
   c->analyses = analyses;
   c->seconds_total = secs;
-  return MGS_OK;
+  return load_sdf(c, f, err);
 }

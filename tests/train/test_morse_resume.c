@@ -96,11 +96,26 @@ static void resume_identity(void) {
   mgs_trainer *b = make(&o, &m, &cb);
   CHECK_OK(mgs_trainer_run_until(b, 150, &err), &err);
   CHECK_OK(mgs_trainer_save_checkpoint(b, ck, &err), &err);
+  /* the SDF grid of the last analysis (what the normal loss samples) comes back too */
+  const float probe[6] = {0.1f, 0.2f, 0.3f, -0.4f, 0.05f, 0.6f};
+  float before[2] = {0, 0}, after[2] = {1, 1};
+  size_t vox = 0;
+  CHECK(mgs_morse_ctx_sdf(cb) != NULL);
+  if (mgs_morse_ctx_sdf(cb)) {
+    mgs_vdb_sample(mgs_morse_ctx_sdf(cb), 2, probe, before);
+    vox = mgs_vdb_grid_active_voxel_count(mgs_morse_ctx_sdf(cb));
+  }
   mgs_trainer_destroy(b);
   mgs_morse_ctx_unref(cb);
   mgs_trainer *c = make(&o, &m, &cc);
   CHECK_OK(mgs_trainer_load_checkpoint(c, ck, &err), &err);
   CHECK(mgs_morse_ctx_result(cc)->iteration == 120);
+  CHECK(mgs_morse_ctx_sdf(cc) != NULL);
+  if (mgs_morse_ctx_sdf(cc)) {
+    mgs_vdb_sample(mgs_morse_ctx_sdf(cc), 2, probe, after);
+    CHECK(mgs_vdb_grid_active_voxel_count(mgs_morse_ctx_sdf(cc)) == vox);
+    CHECK(before[0] == after[0] && before[1] == after[1]);
+  }
   CHECK_OK(mgs_trainer_run(c, &err), &err);
   CHECK(same_model(mgs_trainer_model(a), mgs_trainer_model(c)));
   mgs_trainer_destroy(a); mgs_trainer_destroy(c);

@@ -21,6 +21,7 @@ const char *train_morse_flags_usage =
     "      --spawn gaps|literal|none     (gaps)   --prune floaters|literal|none (floaters)\n"
     "      --topo-loss[=eliminate|literal]  persistence regularization (eliminate)\n"
     "      --beta B (0.005)  --eps-sig E (0.02)  --eps-p E (0.01)  --topo-dims 0,1,2\n"
+    "      --min-bar V         bars shorter than V voxels stay out of L_topo (0.5)\n"
     "      --morse-every K (500)  --morse-warmup W (3000)  --morse-until U (15000)\n"
     "      --morse-resolution R (128)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"
     "      --gap-max G (0.05)  --min-cameras M (3)  --floater-volume F (0.01)  --floater-mass F (0.01)\n"
@@ -28,14 +29,14 @@ const char *train_morse_flags_usage =
     "      analysis rows: RUN/morse_analysis.csv\n";
 
 typedef enum { K_PRESET, K_LITERAL, K_SPAWN, K_PRUNE, K_TOPO, K_BETA, K_EPSP, K_EPSSIG, K_DIMS, K_EVERY, K_WARMUP,
-               K_UNTIL, K_RES, K_TAU, K_SDF, K_GAP, K_MINCAM, K_FVOL, K_FMASS, K_MAXSPAWN, K_COUNT } key;
+               K_UNTIL, K_RES, K_TAU, K_SDF, K_GAP, K_MINCAM, K_FVOL, K_FMASS, K_MAXSPAWN, K_MINBAR, K_COUNT } key;
 static const struct { const char *name; int arg; const char *cfg; } flags[K_COUNT] = {
     {"preset", 1, "preset"}, {"literal", 0, "literal"}, {"spawn", 1, "morse_spawn"}, {"prune", 1, "morse_prune"},
     {"topo-loss", 2, "topo_loss"}, {"beta", 1, "topo_beta"}, {"eps-p", 1, "eps_p"}, {"eps-sig", 1, "eps_sig"},
     {"topo-dims", 1, "topo_dims"}, {"morse-every", 1, "morse_every"}, {"morse-warmup", 1, "morse_warmup"},
     {"morse-until", 1, "morse_until"}, {"morse-resolution", 1, "morse_resolution"}, {"morse-tau", 1, "morse_tau"},
     {"morse-sdf", 1, "morse_sdf"}, {"gap-max", 1, "gap_max"}, {"min-cameras", 1, "min_cameras"},
-    {"floater-volume", 1, "floater_volume"}, {"floater-mass", 1, "floater_mass"}, {"max-spawn", 1, "max_spawn"}};
+    {"floater-volume", 1, "floater_volume"}, {"floater-mass", 1, "floater_mass"}, {"max-spawn", 1, "max_spawn"}, {"min-bar", 1, "min_bar"}};
 
 static int fail(const char *flag, const char *fmt, const char *v) {
   fprintf(stderr, "morsegs train: --%s ", flag);
@@ -85,6 +86,7 @@ static int apply(train_morse_flags *f, key k, const char *v) {
     case K_TAU: if (!num("morse-tau", v, 1e-3, 0.999, &x)) return 0; o->tau = x; return 1;
     case K_GAP: if (!num("gap-max", v, 1e-6, 0.5, &x)) return 0; o->gap_max = x; return 1;
     case K_FVOL: if (!num("floater-volume", v, 0, 0.999, &x)) return 0; o->floater_volume = x; return 1;
+    case K_MINBAR: if (!num("min-bar", v, 0, 16, &x)) return 0; o->min_bar = x; return 1;
     case K_FMASS: if (!num("floater-mass", v, 0, 0.999, &x)) return 0; o->floater_mass = x; return 1;
     case K_EVERY: if (!num("morse-every", v, 1, 1e6, &x) || x != floor(x)) return x != floor(x) ? fail("morse-every", "must be an integer in [1, 1000000] (got '%s')", v) : 0; o->every = (int)x; return 1;
     case K_WARMUP: if (!num("morse-warmup", v, 1, 1e7, &x) || x != floor(x)) return x != floor(x) ? fail("morse-warmup", "must be an integer >= 1 (got '%s')", v) : 0; o->warmup = (int)x; return 1;
@@ -247,6 +249,7 @@ void train_morse_flags_record(const train_morse_flags *f, const char *strategy, 
   mgs_settings_setf(s, "floater_volume", o->floater_volume);
   mgs_settings_setf(s, "floater_mass", o->floater_mass);
   mgs_settings_seti(s, "max_spawn", o->max_spawn);
+  mgs_settings_setf(s, "min_bar", o->min_bar);
 }
 
 void train_morse_flags_free(train_morse_flags *f) {

@@ -69,6 +69,8 @@ typedef struct mgs_morse_options {
   mgs_morse_topo topo;
   double beta;            /* weight (0.005; seed 0.001-0.01) */
   unsigned dims;          /* dimensions in the loss, bit k = H_k (0x7) */
+  double min_bar;         /* bars shorter than this many voxels stay out of the loss (0.5:
+                             below the SDF's accuracy they are discretization noise) */
 } mgs_morse_options;
 
 void mgs_morse_options_default(mgs_morse_options *o);

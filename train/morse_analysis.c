@@ -35,6 +35,7 @@ void mgs_morse_options_default(mgs_morse_options *o) {
   o->topo = MGS_MORSE_TOPO_NONE;
   o->beta = 0.005;
   o->dims = 0x7;
+  o->min_bar = 0.5;
 }
 
 mgs_status mgs_morse_options_check(const mgs_morse_options *o, int iterations, mgs_error *err) {
@@ -49,6 +50,7 @@ mgs_status mgs_morse_options_check(const mgs_morse_options *o, int iterations, m
   RANGE(o->eps_sig > 0 && o->eps_sig <= 0.5, "--eps-sig must be in (0, 0.5] of the diagonal (got %g)", o->eps_sig);
   RANGE(o->gap_max > 0 && o->gap_max <= 0.5, "--gap-max must be in (0, 0.5] of the diagonal (got %g)", o->gap_max);
   RANGE(o->beta >= 0 && o->beta <= 100, "--beta must be in [0, 100] (got %g)", o->beta);
+  RANGE(o->min_bar >= 0 && o->min_bar <= 16, "--min-bar must be in [0, 16] voxels (got %g)", o->min_bar);
   RANGE(o->dims >= 1 && o->dims <= 7, "--topo-dims must name dimensions among 0,1,2");
   RANGE(o->max_spawn >= 0, "--max-spawn must be >= 0 (got %d)", o->max_spawn);
   RANGE(o->min_cameras >= 0, "--min-cameras must be >= 0 (got %d)", o->min_cameras);
@@ -299,7 +301,7 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
     for (size_t k = 0; k < c->r.n; k++) {
       mgs_morse_pair *mp = &c->r.pairs[k];
       const mgs_pair *p = &mp->p;
-      if (!isfinite(p->death) || !((o->dims >> p->dim) & 1u) || !(p->death - p->birth < eps_sig)) continue;
+      if (!morse_in_loss(o, p, eps_sig, h)) continue;
       for (int end = 0; end < 2; end++) {
         double v = end ? p->death : p->birth;
         if (fabs(v) >= w * (1 - 1e-6)) continue; /* set by the clamp: no gradient */

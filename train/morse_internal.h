@@ -3,6 +3,7 @@
 #ifndef MGS_MORSE_INTERNAL_H
 #define MGS_MORSE_INTERNAL_H
 #include "train/mgs_morse.h"
+#include <math.h>
 #include "topo/mgs_topo_select.h"
 
 typedef struct morse_row {
@@ -34,6 +35,15 @@ struct mgs_morse_ctx {
 };
 
 #define morse_eps_in_use mgs_morse_eps_in_use
+
+/* Is a pair (values at the analysis) in L_topo's set? Finite, of a selected dimension,
+ * shorter than ε_sig, and not shorter than min_bar voxels: a bar below the SDF's own
+ * accuracy (sweep: 0.44 voxel on a sphere) is discretization noise, not a feature, and
+ * most pairs of a trained model are such (they would dominate the term's cost). */
+static inline int morse_in_loss(const mgs_morse_options *o, const mgs_pair *p, double eps_sig, double h) {
+  double pe = p->death - p->birth;
+  return p->dim >= 0 && p->dim <= 2 && isfinite(p->death) && ((o->dims >> p->dim) & 1u) && pe < eps_sig && pe >= o->min_bar * h;
+}
 
 /* Candidate lists: for each of n points, the Gaussians of g (ascending index) whose
  * ellipsoid of `k_sigma` standard deviations contains the point. CSR: start[n+1], idx. */

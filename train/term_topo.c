@@ -8,7 +8,8 @@
  * loss (eliminate: Σ_{p<ε_sig} p², or the seed's literal Σ max(0, ε_sig − p)²) is taken on
  * those values, and its gradient goes to the Gaussians whose support reaches c through
  * ∂d/∂θ = −(∂A(c)/∂θ)/|∇A(c)| (mgs_morse_sdf_point_grad). Ends set by the band clamp are
- * constants. Bars in the loss are those with persistence < ε_sig at the analysis. */
+ * constants. Bars in the loss are those with persistence in [min_bar voxels, ε_sig) at the
+ * analysis (morse_in_loss). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -137,7 +138,7 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
   for (size_t k = 0; k < r->n; k++) {
     d.pairs[k] = r->pairs[k].p;
     const mgs_pair *p = &r->pairs[k].p;
-    if (!isfinite(p->death) || !(p->death - p->birth < eps_sig)) d.pairs[k].dim = 3;
+    if (!morse_in_loss(o, p, eps_sig, r->voxel_size)) d.pairs[k].dim = 3;
   }
   /* every end's candidate Gaussians side by side, gathered once per iteration; each end
      reads (and writes its gradient into) its own slice, so ends run in parallel */

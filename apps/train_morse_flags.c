@@ -147,6 +147,8 @@ int train_morse_flags_take(int *argc, char ***argv, train_morse_flags *f) {
       if (i + 1 >= n) { free(out); return fail(flags[k].name, "needs a value%s", ""); }
       v = in[++i];
     }
+    /* --topo-loss takes its kind as --topo-loss=KIND or as the next word when it is one */
+    if (flags[k].arg == 2 && !v && i + 1 < n && pick(in[i + 1], topo_names, 3) >= 0) v = in[++i];
     if (flags[k].arg == 0 && v) { free(out); return fail(flags[k].name, "takes no value (got '%s')", v); }
     if (!apply(f, (key)k, v)) { free(out); return 0; }
     typed[k] = 1;

@@ -27,7 +27,8 @@
  *            same dimension-1 pair, with the wall's normals all around the axis.
  * Prune rules (--prune):
  *   literal  Gaussians whose 3σ ellipsoid holds a critical cell of a bar shorter than ε_p
- *            and none of a longer bar ("contributing only to low-persistence features").
+ *            and none of a longer bar ("contributing only to low-persistence features");
+ *            bars below min_bar voxels (the SDF's accuracy) count as neither.
  *   floaters components of {d ≤ 0} other than the largest whose volume or opacity mass is
  *            below a fraction of the largest's (their Gaussians, unless they also touch the
  *            largest), and Gaussians whose mean fewer than m training cameras see. */
@@ -233,7 +234,12 @@ static mgs_status prune_literal(mgs_morse_ctx *c, const mgs_gaussians *g, uint8_
   size_t np = 0;
   for (size_t k = 0; k < r->n; k++) {
     const mgs_pair *p = &r->pairs[k].p;
-    int is_low = isfinite(p->death) && !p->truncated && p->death - p->birth < eps;
+    double pe = p->death - p->birth;
+    /* bars below the SDF's accuracy (min_bar voxels) are no features at all: with them
+       nearly every surface Gaussian touches a "low-persistence feature" (measured: 86 %
+       of a 10k-Gaussian genus-2 model pruned at once) */
+    if (pe < c->o.min_bar * r->voxel_size) continue;
+    int is_low = isfinite(p->death) && !p->truncated && pe < eps;
     memcpy(pts + 3 * np, p->b.pos, 3 * sizeof(double)); low[np++] = (uint8_t)is_low;
     if (isfinite(p->death)) { memcpy(pts + 3 * np, p->d.pos, 3 * sizeof(double)); low[np++] = (uint8_t)is_low; }
   }

@@ -205,6 +205,7 @@ int train_morse_flags_check(train_morse_flags *f, const char *strategy, int iter
     fprintf(stderr, "morsegs train: MorseGS settings given, but neither --strategy morse nor --topo-loss uses them\n");
     return 0;
   }
+  if (!morse && o->topo == MGS_MORSE_TOPO_NONE) return 1; /* nothing reads the options */
   mgs_error err;
   mgs_error_clear(&err);
   if (mgs_morse_options_check(o, iterations, &err) != MGS_OK) { fprintf(stderr, "morsegs train: %s\n", err.msg); return 0; }

@@ -34,6 +34,7 @@ static int morse_grad_parse_normal(const char *arg) {
   return 1;
 }
 /* ---- end of the normal-loss / level-set block ---- */
+#include "apps/train_morse_flags.h" /* MorseGS flags (kept apart) */
 
 static volatile sig_atomic_t g_stop = 0;
 /* Topology-GS flags (apps/train_topogs_flags.c): parsed before the option table */
@@ -55,7 +56,7 @@ static void usage(FILE *f) {
     "                          as the reference's defaults and its -w for the synthetic scenes)\n"
     "      --test-every N      COLMAP/nerfstudio: every Nth view is a test view (8)\n"
     "      --seed S            random seed (0)\n"
-    "      --strategy adc      density control: adc (reference) or none\n"
+    "      --strategy adc      density control: adc (reference), morse (below) or none\n"
     "      --init sfm|random|levelset|lpvi  initial Gaussians: dataset points (falls back to random),\n"
     "                          random, MorseGS level sets of the dataset points' distance field (flat,\n"
     "                          tangent), or LPVI over the dataset points (Topology-GS, below)\n"
@@ -85,7 +86,8 @@ static void usage(FILE *f) {
     "                          (random chunk order, random within a chunk; default random as the reference)\n"
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "      --quiet             no progress bar\n"
-    "  Not available yet: --strategy morse, --topo-loss.\n");
+    "%s",
+    train_morse_flags_usage);
   mgs_topogs_usage(f);
 }
 
@@ -142,8 +144,17 @@ static int path_inside(const char *inner, const char *outer) {
   return inside;
 }
 
+static mgs_morse_ctx *g_morse; /* the run's Morse context, for the stats (NULL: none) */
+
 static mgs_status write_stats(const char *run, const mgs_trainer *t, mgs_error *err) {
   cJSON *o = cJSON_CreateObject();
+  if (g_morse) { /* MorseGS: analysis cost against the training wall time */
+    cJSON_AddNumberToObject(o, "morse_analyses", (double)mgs_morse_ctx_analyses(g_morse));
+    cJSON_AddNumberToObject(o, "morse_analysis_seconds", mgs_morse_ctx_seconds(g_morse));
+    double ph[MGS_TRAIN_PHASES];
+    mgs_trainer_phase_seconds(t, ph);
+    cJSON_AddNumberToObject(o, "loss_term_seconds", ph[5]); /* L_topo between analyses */
+  }
   cJSON_AddNumberToObject(o, "iterations", mgs_trainer_iteration(t));
   cJSON_AddNumberToObject(o, "train_seconds", mgs_trainer_seconds(t));
   cJSON_AddNumberToObject(o, "gaussians", (double)mgs_trainer_model(t)->n);
@@ -161,7 +172,8 @@ static mgs_status write_stats(const char *run, const mgs_trainer *t, mgs_error *
 /* Removes what an earlier run wrote (with --force), never anything else. */
 static mgs_status clear_run(const char *run, mgs_error *err) {
   static const char *dirs[] = {"point_cloud", "eval", "renders"};
-  static const char *files[] = {"checkpoint.mgsckpt", "cameras.json", "cfg_args", "results.json", "train_stats.json"};
+  static const char *files[] = {"checkpoint.mgsckpt", "cameras.json", "cfg_args", "results.json", "train_stats.json",
+                                "morse_analysis.csv"};
   for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++) {
     char *p = mgs_path_join(run, dirs[i]);
     mgs_status st = p && mgs_is_dir(p) ? mgs_remove_tree(p, err) : MGS_OK;
@@ -179,9 +191,18 @@ static mgs_status clear_run(const char *run, mgs_error *err) {
 static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
                              const char *init, const char *save_at, int downscale, int max_width, int white,
                              int test_every, int resume, int force, int threads, int quiet, int random_points,
-                             unsigned long long seed);
+                             unsigned long long seed, train_morse_flags *mf);
 
+static int mgs_cmd_train_parse(int argc, char **argv, train_morse_flags *mf);
 int mgs_cmd_train(int argc, char **argv) {
+  train_morse_flags mf; /* MorseGS flags leave argv before getopt (apps/train_morse_flags.c) */
+  if (!train_morse_flags_take(&argc, &argv, &mf)) { train_morse_flags_free(&mf); return 2; }
+  int rc = mgs_cmd_train_parse(argc, argv, &mf);
+  train_morse_flags_free(&mf);
+  return rc;
+}
+
+static int mgs_cmd_train_parse(int argc, char **argv, train_morse_flags *mf) {
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"iters", required_argument, 0, O_ITERS},
     {"downscale", required_argument, 0, O_DOWNSCALE}, {"sh-degree", required_argument, 0, O_SH},
@@ -332,7 +353,7 @@ int mgs_cmd_train(int argc, char **argv) {
   init = mgs_topogs_init(&g_topogs, init, given[O_INIT]);
   if (given[O_DOWNSCALE] && !given[O_MAXW]) max_width = 0; /* a resolution given: no cap, as the reference */
   int rc = mgs_cmd_train_run(data, run, &o, strategy, init, save_at, downscale, max_width, white, test_every, resume, force,
-                             threads, quiet, random_points, seed);
+                             threads, quiet, random_points, seed, mf);
   mgs_settings_free(&prev);
   return rc;
 }
@@ -340,10 +361,12 @@ int mgs_cmd_train(int argc, char **argv) {
 static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_options *op, const char *strategy,
                              const char *init, const char *save_at, int downscale, int max_width, int white,
                              int test_every, int resume, int force, int threads, int quiet, int random_points,
-                             unsigned long long seed) {
+                             unsigned long long seed, train_morse_flags *mf) {
   mgs_train_options o = *op;
-  if (!strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: --strategy morse is not available yet (comes in a later issue)\n"); return 2; }
-  if (strcmp(strategy, "adc") && strcmp(strategy, "none")) { fprintf(stderr, "morsegs train: unknown --strategy '%s' (adc, none)\n", strategy); return 2; }
+  if (strcmp(strategy, "adc") && strcmp(strategy, "none") && strcmp(strategy, "morse")) { fprintf(stderr, "morsegs train: unknown --strategy '%s' (adc, morse, none)\n", strategy); return 2; }
+  /* MorseGS: ranges and the grid budget, before anything is written */
+  if (!train_morse_flags_check(mf, strategy, o.iterations)) return 2;
+  int use_morse = !strcmp(strategy, "morse") || mf->o.topo != MGS_MORSE_TOPO_NONE;
   if (strcmp(init, "sfm") && strcmp(init, "random") && strcmp(init, "lpvi") && strcmp(init, "levelset")) { fprintf(stderr, "morsegs train: unknown --init '%s' (sfm, random, levelset, lpvi)\n", init); return 2; }
   int saves[64], n_saves = 0;
   for (const char *p = save_at; *p && n_saves < 64;) {
@@ -390,6 +413,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   int rc = 1;
   mgs_trainer *t = NULL;
   mgs_run_lock *lock = NULL;
+  mgs_morse_ctx *mctx = NULL; /* MorseGS analysis context (NULL: not used) */
   mgs_status st = mgs_dataset_load(data, &dopt, &ds, &err);
   if (st) goto done;
   white = ds->white_background;
@@ -438,7 +462,22 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   if (st) goto done;
   mgs_strategy *strat = NULL;
   if (!strcmp(strategy, "adc")) strat = mgs_strategy_adc_create(&o.adc);
+  /* ---- MorseGS: one analysis context shared by the strategy and the L_topo term */
+  if (use_morse) {
+    mf->o.until = mf->o.until > o.adc.densify_until && !strcmp(strategy, "morse") ? o.adc.densify_until : mf->o.until;
+    if ((st = mgs_morse_ctx_create(&mf->o, ds, &mctx, &err))) { mgs_gaussians_destroy(g0); goto done; }
+    if (!strcmp(strategy, "morse") && (st = mgs_strategy_morse_create(&o.adc, mctx, &strat, &err))) { mgs_gaussians_destroy(g0); goto done; }
+    char *csv = mgs_path_join(run, "morse_analysis.csv");
+    mgs_morse_ctx_set_csv(mctx, csv);
+    free(csv);
+    g_morse = mctx;
+  }
   if ((st = mgs_trainer_create(ds, &o, g0, strat, &t, &err))) goto done;
+  if (mctx && mf->o.topo != MGS_MORSE_TOPO_NONE) {
+    mgs_term *topo = NULL;
+    if ((st = mgs_term_topo_create(mctx, strcmp(strategy, "morse") != 0, &topo, &err))) goto done;
+    if ((st = mgs_trainer_add_term(t, topo, &err))) goto done;
+  }
   if ((st = mgs_topogs_add_terms(&g_topogs, t, &err))) goto done;
   if (g_normal_loss > 0) { /* MorseGS normal loss (train/mgs_term_normal.h) */
     mgs_normal_options no;
@@ -501,6 +540,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_seti(&s, "threads", mgs_parallel_max_threads());
     mgs_settings_set(&s, "freeze", o.freeze ? "True" : "False", 0);
     mgs_topogs_flags_record(&g_topogs, !strcmp(init_used, "lpvi"), &s);
+    train_morse_flags_record(mf, strategy, &s); /* MorseGS settings */
     char *cfg = mgs_path_join(run, "cfg_args");
     st = mgs_settings_write(cfg, &s, &err);
     free(cfg);
@@ -529,12 +569,18 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_status s2 = mgs_run_write_ply(run, mgs_trainer_model_iteration(t), mgs_trainer_model(t), &e2);
     fprintf(stderr, "morsegs train: %s; %s\n", err.msg, s2 == MGS_OK ? "current model written" : e2.msg);
     write_stats(run, t, &e2);
+    if (mctx) mgs_morse_ctx_flush_csv(mctx, &e2);
     rc = 130;
     goto done;
   }
   if (st) goto done;
   if ((st = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &err))) goto done;
   if ((st = write_stats(run, t, &err))) goto done;
+  if (mctx) {
+    if ((st = mgs_morse_ctx_flush_csv(mctx, &err))) goto done;
+    mgs_info("Morse analyses: %zu, %.1f s (%.1f %% of the training wall time)", mgs_morse_ctx_analyses(mctx),
+             mgs_morse_ctx_seconds(mctx), 100.0 * mgs_morse_ctx_seconds(mctx) / (mgs_trainer_seconds(t) > 0 ? mgs_trainer_seconds(t) : 1));
+  }
   /* a final checkpoint lets --resume extend the run with a larger --iters */
   if (o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
   printf("trained %d iterations in %.1f s: %zu Gaussians -> %s/point_cloud/iteration_%d/point_cloud.ply\n",
@@ -543,6 +589,8 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
 done:
   if (rc == 1) mgs_cli_fail("train", &err);
   mgs_trainer_destroy(t);
+  g_morse = NULL;
+  mgs_morse_ctx_unref(mctx);
   mgs_dataset_destroy(ds);
   mgs_run_lock_release(lock);
   free(ckpt);

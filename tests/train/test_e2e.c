@@ -3,7 +3,7 @@
  * low resolution, `morsegs eval` on the held-out views: test PSNR must clear a threshold
  * that the same run with parameter updates disabled (--freeze, i.e. a zero gradient)
  * cannot reach. Also: run layout, render, refusal to overwrite, the dataset untouched,
- * resume, and the not-yet-available MorseGS flags. */
+ * resume, and refused MorseGS flags. */
 #include <dirent.h>
 #include <stdarg.h>
 #include <sys/wait.h>
@@ -131,9 +131,10 @@ int main(void) {
   CHECK(mgs_path_exists(path));
   CHECK(sh("ls %s/point_cloud/iteration_*/point_cloud.ply > /dev/null", sig) == 0);
 
-  /* MorseGS-only flags are refused clearly (usage error) */
-  CHECK(sh("%s train %s -o %s/x --strategy morse 2>/dev/null", cli, data, tmp) == 2);
-  CHECK(sh("%s train %s -o %s/x --topo-loss 2>/dev/null", cli, data, tmp) == 2);
+  /* MorseGS flags out of range, and flags not available yet, are refused clearly (usage
+     error; tests/train/test_morse_cli.c checks the MorseGS flags in detail) */
+  CHECK(sh("%s train %s -o %s/x --strategy morse --morse-every 0 2>/dev/null", cli, data, tmp) == 2);
+  CHECK(sh("%s train %s -o %s/x --topo-loss --beta -1 2>/dev/null", cli, data, tmp) == 2);
   CHECK(sh("%s train %s -o %s/x --init lpvi 2>/dev/null", cli, data, tmp) == 2);
   return mgs_test_finish();
 }

@@ -1,0 +1,270 @@
+/* MorseGS-R: L_topo on the model (SPEC §5.2 item 5, §6), through train/mgs_term.h.
+ *
+ * The diagram is not recomputed every iteration. The Morse analysis (every K iterations)
+ * fixes the pairing, the critical voxels and, for every bar end the loss can move, the
+ * closest point c on {A = τ} of its voxel. In between, each end's value is re-evaluated
+ * from the current Gaussians to first order, value = value₀ − (A(c) − A₀(c)) / |∇A₀(c)|
+ * (the implicit-function step: the surface moves by −δA/|∇A| along its normal at c), the
+ * loss (eliminate: Σ_{p<ε_sig} p², or the seed's literal Σ max(0, ε_sig − p)²) is taken on
+ * those values, and its gradient goes to the Gaussians whose support reaches c through
+ * ∂d/∂θ = −(∂A(c)/∂θ)/|∇A(c)| (mgs_morse_sdf_point_grad). Ends set by the band clamp are
+ * constants. Bars in the loss are those with persistence in [min_bar voxels, ε_sig) at the
+ * analysis (morse_in_loss). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "train/morse_internal.h"
+#include "train/mgs_morse_grad.h"
+#include "train/mgs_term.h"
+#include "topo/mgs_topo_grad.h"
+#include "core/mgs_parallel.h"
+
+typedef struct topo_term {
+  mgs_morse_ctx *ctx;
+  int owns_state;
+  /* candidate Gaussians per bar end; rebuilt when the analysis, the count or the
+     25-iteration tick changes (their 3.5σ supports: a superset of what the 3σ evaluation
+     reads, so a rebuild at another iteration gives the same sums) */
+  morse_gather gat;
+  int built_analysis, built_it;
+  size_t built_n;
+  size_t n_ends;
+  size_t *end_pair;            /* end -> 2 * pair + (0 birth, 1 death) */
+  double *pts;
+  mgs_gaussians *loc, *locg;
+} topo_term;
+
+static void topo_clear(topo_term *t) {
+  if (t->gat.start) morse_gather_free(&t->gat);
+  free(t->end_pair); t->end_pair = NULL;
+  free(t->pts); t->pts = NULL;
+  t->n_ends = 0;
+  t->built_analysis = -1;
+}
+
+static mgs_status topo_prepare(topo_term *t, const mgs_gaussians *g, int it, mgs_error *err) {
+  const mgs_morse_result *r = &t->ctx->r;
+  if (t->built_analysis == r->iteration && t->built_n == g->n && it - t->built_it < 25 && t->gat.start) return MGS_OK;
+  topo_clear(t);
+  t->end_pair = malloc((2 * r->n + 1) * sizeof(size_t));
+  t->pts = malloc((2 * r->n + 1) * 3 * sizeof(double));
+  if (!t->end_pair || !t->pts) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  for (size_t k = 0; k < r->n; k++) {
+    const mgs_morse_pair *mp = &r->pairs[k];
+    if (mp->has_cb) { memcpy(t->pts + 3 * t->n_ends, mp->cb, 3 * sizeof(double)); t->end_pair[t->n_ends++] = 2 * k; }
+    if (mp->has_cd) { memcpy(t->pts + 3 * t->n_ends, mp->cd, 3 * sizeof(double)); t->end_pair[t->n_ends++] = 2 * k + 1; }
+  }
+  mgs_status st = morse_gather_build(g, t->pts, t->n_ends, 3.5, &t->gat, err);
+  if (st) return st;
+  t->built_analysis = r->iteration;
+  t->built_n = g->n;
+  t->built_it = it;
+  return MGS_OK;
+}
+
+/* A model view of rows [s, s + n) of m (no ownership). */
+static mgs_gaussians slice(const mgs_gaussians *m, size_t s, size_t n) {
+  mgs_gaussians v = *m;
+  v.n = v.capacity = n;
+  v.mean += 3 * s; v.log_scale += 3 * s; v.rot += 4 * s; v.opacity += s;
+  v.sh_dc += 3 * s; v.sh_rest += (size_t)MGS_SH_REST_MAX * s;
+  return v;
+}
+
+/* The candidates of every end, in order, into t->loc (the field's groups only). */
+static mgs_status gather_all(topo_term *t, const mgs_gaussians *g, size_t total, mgs_error *err) {
+  mgs_status st = MGS_OK;
+  if (t->loc->capacity < total) st = mgs_gaussians_reserve(t->loc, total, err);
+  if (st == MGS_OK && t->locg->capacity < total) st = mgs_gaussians_reserve(t->locg, total, err);
+  if (st) return st;
+  t->loc->n = t->locg->n = total;
+  mgs_gaussians *L = t->loc;
+  for (size_t j = 0; j < total; j++) {
+    size_t i = t->gat.idx[j];
+    for (int q = 0; q < 3; q++) { L->mean[3 * j + q] = g->mean[3 * i + q]; L->log_scale[3 * j + q] = g->log_scale[3 * i + q]; }
+    for (int q = 0; q < 4; q++) L->rot[4 * j + q] = g->rot[4 * i + q];
+    L->opacity[j] = g->opacity[i];
+  }
+  return MGS_OK;
+}
+
+typedef struct end_job {
+  topo_term *t;
+  float tau;
+  double *aval;          /* out: A at each end's c */
+  const double *weight;  /* grad pass: beta * dL/d(end) */
+  mgs_status *st;
+} end_job;
+
+static void end_value(void *vp, size_t b, size_t e) {
+  end_job *j = vp;
+  for (size_t q = b; q < e; q++) {
+    size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
+    mgs_gaussians v = slice(j->t->loc, s, cnt);
+    j->aval[q] = 0;
+    if (cnt) j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, 0, NULL, &j->aval[q], NULL);
+  }
+}
+
+static void end_grad(void *vp, size_t b, size_t e) {
+  end_job *j = vp;
+  for (size_t q = b; q < e; q++) {
+    size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
+    if (j->weight[q] == 0 || cnt == 0) continue;
+    mgs_gaussians v = slice(j->t->loc, s, cnt), vg = slice(j->t->locg, s, cnt);
+    j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, j->weight[q], &vg, NULL, NULL);
+  }
+}
+
+/* Loss (unweighted) on the current model; with grad, adds beta * dL/dθ into it. */
+static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_gaussians *grad, double beta,
+                            double *loss, double *short_pers, mgs_error *err) {
+  const mgs_morse_ctx *c = t->ctx;
+  const mgs_morse_options *o = &c->o;
+  const mgs_morse_result *r = &c->r;
+  *loss = 0;
+  if (short_pers) *short_pers = 0;
+  if (r->iteration == 0 || r->n == 0) return MGS_OK;
+  mgs_status st = topo_prepare(t, g, it, err);
+  if (st) return st;
+  mgs_diagram d;
+  memset(&d, 0, sizeof d);
+  d.n = d.capacity = r->n;
+  d.pairs = malloc(r->n * sizeof(mgs_pair));
+  double *dlb = calloc(r->n, sizeof(double)), *dld = calloc(r->n, sizeof(double));
+  if (!d.pairs || !dlb || !dld) { free(d.pairs); free(dlb); free(dld); return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory"); }
+  double eps_sig = o->eps_sig * r->diagonal;
+  /* pairs outside the loss set get dimension 3 (no mask bit) */
+  for (size_t k = 0; k < r->n; k++) {
+    d.pairs[k] = r->pairs[k].p;
+    const mgs_pair *p = &r->pairs[k].p;
+    if (!morse_in_loss(o, p, eps_sig, r->voxel_size)) d.pairs[k].dim = 3;
+  }
+  /* every end's candidate Gaussians side by side, gathered once per iteration; each end
+     reads (and writes its gradient into) its own slice, so ends run in parallel */
+  size_t total = t->gat.start[t->n_ends];
+  st = gather_all(t, g, total, err);
+  double *aval = malloc((t->n_ends + 1) * sizeof(double));
+  mgs_status *est = calloc(t->n_ends + 1, sizeof(mgs_status));
+  if (st == MGS_OK && (!aval || !est)) st = mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  end_job job = {t, (float)o->tau, aval, NULL, est};
+  if (st == MGS_OK) {
+    mgs_parallel_for(0, t->n_ends, 8, end_value, &job);
+    for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
+      if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the field at a bar end is not finite");
+  }
+  for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++) {
+    size_t k = t->end_pair[e] / 2;
+    const mgs_morse_pair *mp = &r->pairs[k];
+    if (t->end_pair[e] & 1) d.pairs[k].death = mp->p.death - (aval[e] - mp->ad) / mp->gd;
+    else d.pairs[k].birth = mp->p.birth - (aval[e] - mp->ab) / mp->gb;
+  }
+  if (st == MGS_OK) {
+    mgs_topo_loss_kind kind = o->topo == MGS_MORSE_TOPO_LITERAL ? MGS_TOPO_LOSS_LITERAL : MGS_TOPO_LOSS_ELIMINATE;
+    *loss = mgs_topo_loss(&d, kind, eps_sig, o->dims, dlb, dld);
+    if (short_pers)
+      for (size_t k = 0; k < r->n; k++)
+        if (d.pairs[k].dim < 3 && ((o->dims >> d.pairs[k].dim) & 1u)) *short_pers += fabs(d.pairs[k].death - d.pairs[k].birth);
+  }
+  if (grad && st == MGS_OK) {
+    double *w = aval; /* reused: the weight of each end */
+    for (size_t e = 0; e < t->n_ends; e++) {
+      size_t k = t->end_pair[e] / 2;
+      w[e] = beta * ((t->end_pair[e] & 1) ? dld[k] : dlb[k]);
+    }
+    for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++)
+      memset(mgs_gaussians_group(t->locg, (mgs_param_group)gr), 0, total * (size_t)mgs_param_dim((mgs_param_group)gr) * sizeof(float));
+    job.weight = w;
+    mgs_parallel_for(0, t->n_ends, 8, end_grad, &job);
+    for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
+      if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the gradient at a bar end is not finite");
+    /* scatter, in a fixed order */
+    for (size_t j = 0; j < total && st == MGS_OK; j++) {
+      size_t i = t->gat.idx[j];
+      for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++) {
+        int dim = mgs_param_dim((mgs_param_group)gr);
+        const float *src = mgs_gaussians_group(t->locg, (mgs_param_group)gr) + j * (size_t)dim;
+        float *dst = mgs_gaussians_group(grad, (mgs_param_group)gr) + i * (size_t)dim;
+        for (int q = 0; q < dim; q++) dst[q] += src[q];
+      }
+    }
+  }
+  free(aval); free(est);
+  free(d.pairs); free(dlb); free(dld);
+  return st;
+}
+
+static unsigned topo_active(void *self, int it) {
+  topo_term *t = self;
+  if (t->ctx->o.beta <= 0) return 0;
+  return (t->ctx->r.iteration > 0 || mgs_morse_is_analysis_iteration(t->ctx, it)) ? MGS_TERM_MODEL : 0;
+}
+
+static mgs_status topo_model_grad(void *self, mgs_term_step *s, mgs_error *err) {
+  topo_term *t = self;
+  mgs_status st = mgs_morse_ctx_update(t->ctx, s->model, s->iteration, NULL, err);
+  if (st) return st;
+  double L = 0;
+  st = topo_eval(t, s->model, s->iteration, s->grad, t->ctx->o.beta, &L, NULL, err);
+  s->value = t->ctx->o.beta * L;
+  mgs_morse_ctx_note_topo(t->ctx, s->value);
+  return st;
+}
+
+static mgs_status topo_save(void *self, FILE *f, mgs_error *err) {
+  topo_term *t = self;
+  uint8_t own = (uint8_t)t->owns_state;
+  if (fwrite(&own, 1, 1, f) != 1) return mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
+  return own ? mgs_morse_ctx_save(t->ctx, f, err) : MGS_OK;
+}
+
+static mgs_status topo_load(void *self, FILE *f, mgs_error *err) {
+  topo_term *t = self;
+  uint8_t own = 0;
+  if (fread(&own, 1, 1, f) != 1 || own != (uint8_t)t->owns_state)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss state does not match this run's setup");
+  topo_clear(t);
+  return own ? mgs_morse_ctx_load(t->ctx, f, err) : MGS_OK;
+}
+
+static void topo_destroy(void *self) {
+  topo_term *t = self;
+  if (!t) return;
+  topo_clear(t);
+  mgs_gaussians_destroy(t->loc);
+  mgs_gaussians_destroy(t->locg);
+  mgs_morse_ctx_unref(t->ctx);
+  free(t);
+}
+
+static const mgs_term_ops topo_ops = {"morse_topo", topo_active, NULL, topo_model_grad, topo_save, topo_load, topo_destroy};
+
+static topo_term *topo_new(mgs_morse_ctx *ctx, int owns_state) {
+  topo_term *t = calloc(1, sizeof *t);
+  if (!t) return NULL;
+  t->loc = mgs_gaussians_create(64, 0);
+  t->locg = mgs_gaussians_create(64, 0);
+  if (!t->loc || !t->locg) { mgs_gaussians_destroy(t->loc); mgs_gaussians_destroy(t->locg); free(t); return NULL; }
+  t->ctx = mgs_morse_ctx_ref(ctx);
+  t->owns_state = owns_state;
+  t->built_analysis = -1;
+  return t;
+}
+
+mgs_status mgs_term_topo_create(mgs_morse_ctx *ctx, int owns_state, mgs_term **out, mgs_error *err) {
+  *out = NULL;
+  topo_term *t = topo_new(ctx, owns_state);
+  if (!t) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  *out = mgs_term_create(&topo_ops, t);
+  if (!*out) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  return MGS_OK;
+}
+
+mgs_status mgs_term_topo_eval(mgs_morse_ctx *ctx, const mgs_gaussians *g, double *loss, double *short_pers,
+                              mgs_error *err) {
+  topo_term *t = topo_new(ctx, 0);
+  if (!t) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  mgs_status st = topo_eval(t, g, ctx->r.iteration, NULL, 0, loss, short_pers, err);
+  topo_destroy(t);
+  return st;
+}

@@ -148,7 +148,7 @@ mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err);
 /* Closest point on {A = τ} from x by Newton steps along ∇A on the α grid (trilinear),
  * then refined on the exact Gaussian sum of g when g is given. Returns 1 when it converged
  * (|A - τ| < 1e-3 τ within 2 voxels... of travel ≤ band), c and |∇A(c)| then set. */
-int mgs_morse_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3],
+int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3],
                             double max_travel, double c[3], double *grad_norm);
 
 /* ---- MorseGS-D: the strategy. ADC (adc options) runs alone before W and after `until`,

@@ -139,7 +139,7 @@ mgs_status mgs_morse_ctx_update(mgs_morse_ctx *c, const mgs_gaussians *g, int it
 
 /* ---- closest points ------------------------------------------------------------- */
 
-int mgs_morse_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3], double max_travel,
+int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3], double max_travel,
                             double c[3], double *grad_norm) {
   double h = mgs_vdb_grid_voxel_size(alpha), p[3] = {x[0], x[1], x[2]};
   for (int it = 0; it < 30; it++) {
@@ -308,7 +308,7 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
         const int32_t *vx = end ? p->d.voxel : p->b.voxel;
         double ijk[3] = {vx[0], vx[1], vx[2]}, x[3], cpt[3], gn;
         mgs_vdb_index_to_world(c->sdf, ijk, x);
-        if (!mgs_morse_closest_point(c->alpha, o->tau, x, fabs(v) + 2 * h, cpt, &gn)) continue;
+        if (!mgs_morse_grid_closest_point(c->alpha, o->tau, x, fabs(v) + 2 * h, cpt, &gn)) continue;
         if (end) { memcpy(mp->cd, cpt, sizeof cpt); mp->gd = gn; mp->has_cd = 1; }
         else { memcpy(mp->cb, cpt, sizeof cpt); mp->gb = gn; mp->has_cb = 1; }
         memcpy(pts + 3 * np, cpt, sizeof cpt);

@@ -9,6 +9,7 @@ PKGS=(
   libassimp-dev libcjson-dev libcairo2-dev libqhull-dev
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
   libopencv-core-dev python3-pot
+  netgen-doc  # hinge.stl: a mesh nobody here made (tests/vdb/test_vdb_band)
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -5,16 +5,21 @@
 // distance: sphere (one isotropic Gaussian, R = 4.3 voxels) / ellipsoid (anisotropic,
 // curvature radius down to ~2 voxels) / two merged Gaussians; CPU s for α-field + SDF of
 // 1M Gaussians at 512³ (torus, bench vdb):
-//   CLOSEST (default) 0.016 / 0.046 / 0.004;  ~8 CPU s in a run where OpenVDB's own
+//   CLOSEST (default) 0.016 / 0.041 / 0.004;  ~8 CPU s in a run where OpenVDB's own
 //         ParticlesToLevelSet took 8.6 (its quiet-machine wall time: 2.4 s)
 //   MESH              0.076 / 0.18  / 0.07;   37 CPU s (19 s wall on a quiet machine)
 //   SWEEP             0.44  / -     / -;      6.5 CPU s (3.4 s wall on a quiet machine)
 // CLOSEST: voxels with a 6-neighbour across the discrete interface (seeds) get the closest
 //         point of {A = τ} by Chopp's iteration on the α-field's triquadratic interpolant;
 //         each further ring of the band (26-neighbour dilation, w rings) takes the nearest of
-//         its neighbours' closest points and refines it the same way. Distances are to the
-//         surface itself, not to a polygonization (MESH) or a first-order upwind solution
-//         (SWEEP), and it is linear in the band voxels with no mesh in between.
+//         its neighbours' closest points and refines it the same way; a relaxation pass then
+//         repairs every voxel whose distance exceeds a neighbour's by more than their
+//         spacing, and each seed also keeps the edge crossing it shares with its neighbour
+//         across the interface, so the band is a distance field between EVERY pair of
+//         neighbours (|d_i - d_j| <= h), on trained models too (floaters, interior
+//         Gaussians, ragged sheets: tests/vdb/test_vdb_band). Distances are to the surface
+//         itself, not to a polygonization (MESH) or a first-order upwind solution (SWEEP),
+//         and it is linear in the band voxels with no mesh in between.
 //   MESH: volumeToMesh(A, τ) -> meshToLevelSet; vertices projected onto {A = τ} and quads
 //         split around a projected centre (mesh_refine). meshToLevelSet decides the sign by
 //         flood fill from outside, so a hollow shell's cavity (A = 0) comes out *inside*

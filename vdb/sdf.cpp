@@ -472,6 +472,10 @@ FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
       auto *nl = next.probeLeaf(ml.origin());
       const Vec3STree::LeafNodeType *cl = ca.probeConstLeaf(ml.origin());
       if (!nl || !cl) return;
+      // the 27 leaves around this one, looked up once (most voxels touch a leaf face)
+      const Vec3STree::LeafNodeType *nb[27];
+      for (int k = 0; k < 27; k++)
+        nb[k] = ca.probeConstLeaf(ml.origin().offsetBy((k / 9 - 1) * 8, (k / 3 % 3 - 1) * 8, (k % 3 - 1) * 8));
       for (auto v = ml.getValueMask().beginOn(); v; ++v) {
         const Coord c = ml.offsetToGlobalCoord(v.pos());
         const Vec3d own(cl->getValue(v.pos()));
@@ -479,19 +483,15 @@ FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
         double best = d0 * d0;
         bool broken = false;
         Vec3d bo;
-        const int o = (int)v.pos();
-        const bool inner = interior(c);
+        const int o = (int)v.pos(), lx = o >> 6, ly = (o >> 3) & 7, lz = o & 7;
         for (int i = -1; i <= 1; i++)
           for (int j = -1; j <= 1; j++)
             for (int l = -1; l <= 1; l++) {
-              Vec3s pn;
-              if (inner) {
-                const int on = o + 64 * i + 8 * j + l;
-                if (!cl->isValueOn(on)) continue;
-                pn = cl->getValue(on);
-              } else if (!ca.probeValue(c.offsetBy(i, j, l), pn)) {
-                continue;
-              }
+              const int x = lx + i, y = ly + j, z = lz + l;
+              const auto *leaf = nb[9 * ((x >> 3) + 1) + 3 * ((y >> 3) + 1) + (z >> 3) + 1];
+              const int on = ((x & 7) << 6) | ((y & 7) << 3) | (z & 7);
+              if (!leaf || !leaf->isValueOn(on)) continue;
+              const Vec3s pn = leaf->getValue(on);
               const Vec3d off = Vec3d(i, j, l) + Vec3d(pn);
               const double d2 = off.lengthSqr();
               if (d2 < best) best = d2, bo = off;  // (false for NaN)

@@ -10,6 +10,7 @@
 #include "core/mgs_math.h"
 #include "core/mgs_rng.h"
 #include "mgs_test.h"
+#include "band_check.h"
 #include "vdb_test_util.h"
 
 static const double QI[4] = {1, 0, 0, 0};
@@ -34,6 +35,15 @@ static mgs_vdb_grid *build_sdf(const mgs_vdb_grid *a, mgs_vdb_sdf_method m, doub
   mgs_error err = {0};
   CHECK_OK(mgs_vdb_sdf_from_alpha(a, &sp, &s, &err), &err);
   return s;
+}
+
+/* Every pair of face neighbours of a CLOSEST band is a distance field's (band_check.h), to
+ * float rounding. */
+static void check_pairs(const mgs_vdb_grid *s, const char *what) {
+  bc_report r;
+  CHECK(bc_check(s, 1e-3, &r) == 0);
+  CHECK_MSG(bc_bad(&r) == 0 && r.pairs > 0, "%s", what);
+  if (bc_bad(&r)) bc_print(stderr, what, &r, mgs_vdb_grid_voxel_size(s));
 }
 
 /* Max |sdf - exact| / h over the active band voxels, exact(x) = signed distance at world x. */
@@ -179,6 +189,7 @@ static void test_isotropic_sphere(void) {
     CHECK_NEAR(e1, 0, 0.1); /* the contract: within a tenth of a voxel */
     CHECK(n3 > 100);
     CHECK_NEAR(e3, 0, 0.1);
+    check_pairs(s_closest, "sphere (CLOSEST)");
     CHECK(e2 < 1.0);        /* first-order fast sweeping: measured, reported, looser */
     /* Both constructions that meet the contract cover the same band (no voxel lost). */
     CHECK_MSG(fabs((double)n3 - (double)n1) < 0.02 * n1, "band voxels MESH %zu CLOSEST %zu", n1, n3);
@@ -270,6 +281,7 @@ static void test_anisotropic_ellipsoid(void) {
             m ? "CLOSEST" : "MESH", worst, eb, nb);
     CHECK_NEAR(worst, 0, 0.1);
     if (methods[m] == MGS_VDB_SDF_CLOSEST) CHECK_NEAR(eb, 0, 0.1);
+    if (methods[m] == MGS_VDB_SDF_CLOSEST) check_pairs(sdf, "ellipsoid (CLOSEST)");
   }
   mgs_vdb_grid_destroy(sdf);
   }
@@ -314,6 +326,7 @@ static void test_two_merge(void) {
     double eb = band_error(sdf, merged_distance, &M, &nb);
     fprintf(stderr, "  merge (%s): max band error %.4f voxel (%zu voxels)\n", m ? "CLOSEST" : "MESH", eb, nb);
     if (methods[m] == MGS_VDB_SDF_CLOSEST) CHECK_NEAR(eb, 0, 0.1);
+    if (methods[m] == MGS_VDB_SDF_CLOSEST) check_pairs(sdf, "merge (CLOSEST)");
     /* Inside at the midpoint although each Gaussian alone never reaches τ. */
     CHECK(mgs_vdb_value(sdf, o, NULL) < 0);
   }
@@ -347,6 +360,7 @@ static void test_hollow_shell(void) {
     fprintf(stderr, "  hollow shell (%s): A(centre) %.3g, sdf(centre) %+.4f, sdf(on the shell) %+.4f\n", names[m], va, vc, vs);
     CHECK(va < 1e-6);
     if (methods[m] != MGS_VDB_SDF_MESH) CHECK(vc > 0);
+    if (methods[m] == MGS_VDB_SDF_CLOSEST) check_pairs(sdf, "hollow shell (CLOSEST)");
     CHECK(vs < 0);
     mgs_vdb_grid_destroy(sdf);
   }

@@ -107,7 +107,8 @@ mgs_status mgs_morse_closest_point(const mgs_gaussians *g, const mgs_morse_index
                                    const mgs_morse_field_params *p, const double x[3], float tau,
                                    double c[3], double *d_out, mgs_error *err);
 
-/* Accumulates weight · ∂d/∂θ into grad (the model's n, same layout; groups other than
+/* Accumulates weight · ∂d/∂θ into grad (the model's n, same layout; grad may be NULL when
+ * weight is 0: the value only; groups other than
  * mean, log_scale, rot and opacity untouched), d the SDF at a voxel whose closest point
  * on {A = τ} is c. *alpha_out (may be NULL) = A(c). Brute-force over all Gaussians, the
  * exact field (filter_var 0, k_sigma 3): for a grid built with a low-pass filter use the

@@ -560,7 +560,8 @@ static void acc_grad(void *ctx, const eval1 *e, size_t i) {
 static mgs_status point_grad(const mgs_gaussians *g, const mgs_morse_index *ix, const mgs_morse_field_params *p,
                              const double c[3], float tau, double weight, mgs_gaussians *grad, mgs_morse_point *pt,
                              mgs_error *err) {
-  if (!grad || grad->n != g->n)
+  /* weight 0 with no gradient model: the value only (A and ∇A at c) */
+  if ((grad || weight != 0) && (!grad || grad->n != g->n))
     return mgs_error_set(err, MGS_ERR_ARG, "morse sdf gradient: gradient model has %zu rows, model %zu",
                          grad ? grad->n : 0, g->n);
   if (!(tau > 0)) return mgs_error_set(err, MGS_ERR_ARG, "morse sdf gradient: tau %g must be positive", (double)tau);

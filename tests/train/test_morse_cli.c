@@ -62,6 +62,18 @@ int main(void) {
   CHECK(cfg && strstr(cfg, "preset='morse-r'") && strstr(cfg, "strategy='adc'") && strstr(cfg, "topo_loss='eliminate'"));
   free(cfg);
 
+  /* every MorseGS component at once (level-set init, normal loss, strategy, L_topo): the
+     analyses run (a CSV row each) and the record names them */
+  char run3[4200];
+  snprintf(run3, sizeof run3, "%s/run-full", tmp);
+  CHECK(sh("%s train %s -o %s --preset morse-full %s", cli, data, run3, common) == 0);
+  cfg = slurp(run3, "cfg_args");
+  csv = slurp(run3, "morse_analysis.csv");
+  CHECK(cfg && strstr(cfg, "preset='morse-full'") && strstr(cfg, "init='levelset'") && strstr(cfg, "normal_loss=0.01") &&
+        strstr(cfg, "strategy='morse'"));
+  CHECK(count_lines(csv) == 3);
+  free(cfg); free(csv);
+
   /* bad input: one-line errors, exit 2, no RUN */
   const char *bads[] = {"--topo-loss --eps-sig 0.9", "--topo-loss --beta -1", "--strategy morse --morse-every 0",
                         "--topo-loss --morse-resolution 2048 --morse-warmup 2", "--topo-loss --morse-warmup 10",

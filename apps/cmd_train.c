@@ -195,7 +195,11 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
 
 static int mgs_cmd_train_parse(int argc, char **argv, train_morse_flags *mf);
 int mgs_cmd_train(int argc, char **argv) {
-  train_morse_flags mf; /* MorseGS flags leave argv before getopt (apps/train_morse_flags.c) */
+  /* Topology-GS flags first (they take `--preset topology-gs` and pass the other presets
+     on), then the MorseGS ones; both leave argv before getopt */
+  mgs_topogs_flags_init(&g_topogs);
+  if (mgs_topogs_flags_extract(&argc, argv, &g_topogs)) return 2;
+  train_morse_flags mf; /* apps/train_morse_flags.c */
   if (!train_morse_flags_take(&argc, &argv, &mf)) { train_morse_flags_free(&mf); return 2; }
   int rc = mgs_cmd_train_parse(argc, argv, &mf);
   train_morse_flags_free(&mf);
@@ -232,8 +236,6 @@ static int mgs_cmd_train_parse(int argc, char **argv, train_morse_flags *mf) {
   unsigned long long seed = 0;
   int c;
   unsigned char given[O_HELP + 1] = {0}; /* flags typed on this command line */
-  mgs_topogs_flags_init(&g_topogs);
-  if (mgs_topogs_flags_extract(&argc, argv, &g_topogs)) return 2;
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     if (c >= O_ITERS && c <= O_HELP) given[c] = 1;

@@ -131,10 +131,12 @@ int main(void) {
   CHECK(mgs_path_exists(path));
   CHECK(sh("ls %s/point_cloud/iteration_*/point_cloud.ply > /dev/null", sig) == 0);
 
-  /* MorseGS flags out of range, and flags not available yet, are refused clearly (usage
-     error; tests/train/test_morse_cli.c checks the MorseGS flags in detail) */
+  /* MorseGS and Topology-GS flags out of range are refused clearly, before anything is
+     written (usage error; tests/train/test_morse_cli.c and tests/topogs check them in detail) */
   CHECK(sh("%s train %s -o %s/x --strategy morse --morse-every 0 2>/dev/null", cli, data, tmp) == 2);
   CHECK(sh("%s train %s -o %s/x --topo-loss --beta -1 2>/dev/null", cli, data, tmp) == 2);
-  CHECK(sh("%s train %s -o %s/x --init lpvi 2>/dev/null", cli, data, tmp) == 2);
+  CHECK(sh("%s train %s -o %s/x --init nope 2>/dev/null", cli, data, tmp) == 2);
+  snprintf(path, sizeof path, "%s/x", tmp);
+  CHECK(!mgs_path_exists(path));
   return mgs_test_finish();
 }

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <stddef.h>
+#include <stdarg.h>
+#include <sys/wait.h>
 #include "core/mgs_error.h"
 
 static int mgs_test_failures = 0;
@@ -36,6 +38,20 @@ static inline int mgs_test_finish(void) {
   fprintf(stderr, "%d checks, %d failed\n", mgs_test_checks, mgs_test_failures);
   if (mgs_test_checks == 0) { fprintf(stderr, "no checks ran\n"); return 1; }
   return mgs_test_failures ? 1 : 0;
+}
+
+/* Runs a shell command (printf-style), echoing it to stderr; its exit status, 128 when it
+ * did not exit normally. For the tests that drive the CLI. */
+static inline int mgs_test_sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static inline int mgs_test_sh(const char *fmt, ...) {
+  char cmd[8192];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(cmd, sizeof cmd, fmt, ap);
+  va_end(ap);
+  fprintf(stderr, "$ %s\n", cmd);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
 }
 
 /* A fresh scratch directory under the test's working directory (removed first). */

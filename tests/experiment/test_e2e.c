@@ -17,18 +17,6 @@
 
 static const char *cli;
 
-static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int sh(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  fprintf(stderr, "$ %s\n", cmd);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
-}
-
 static double mtime(const char *p) {
   struct stat sb;
   if (stat(p, &sb)) return -1;
@@ -85,7 +73,7 @@ int main(void) {
   snprintf(out, sizeof out, "%s/exp", tmp);
   snprintf(log1, sizeof log1, "%s/first.log", tmp);
   snprintf(log2, sizeof log2, "%s/second.log", tmp);
-  CHECK(sh("'%s' scene --builtin sphere -o '%s' --views 8 --test-views 2 --width 48 --height 48 --spp 1 --init-points 1500 -q",
+  CHECK(mgs_test_sh("'%s' scene --builtin sphere -o '%s' --views 8 --test-views 2 --width 48 --height 48 --spp 1 --init-points 1500 -q",
            cli, ds) == 0);
   char *const args[] = {(char *)"morsegs", (char *)"experiment", ds, (char *)"-o", out, (char *)"--iters", (char *)"700",
                         (char *)"--seeds", (char *)"2", (char *)"--evals", (char *)"2", (char *)"--sweep", (char *)"2",
@@ -126,7 +114,7 @@ int main(void) {
     size_t l = strlen(cmd);
     snprintf(cmd + l, sizeof cmd - l, " '%s'", args[i]);
   }
-  CHECK(sh("'%s'%s > '%s'", cli, cmd, log2) == 0);
+  CHECK(mgs_test_sh("'%s'%s > '%s'", cli, cmd, log2) == 0);
   char *after = NULL, *l2 = NULL;
   mgs_read_file(first, &after, &n, NULL);
   CHECK(before && after && !strcmp(before, after));
@@ -171,7 +159,7 @@ int main(void) {
   /* figures of one run equal what `morsegs eval` reports for it */
   char run[700];
   snprintf(run, sizeof run, "%s/runs/ds/baseline/seed_1", out);
-  CHECK(sh("'%s' eval '%s' --no-images > /dev/null", cli, run) == 0);
+  CHECK(mgs_test_sh("'%s' eval '%s' --no-images > /dev/null", cli, run) == 0);
   char *ev = NULL;
   snprintf(path, sizeof path, "%s/results.json", run);
   mgs_read_file(path, &ev, &n, NULL);

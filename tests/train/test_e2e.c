@@ -17,18 +17,6 @@
 
 static const char *cli;
 
-static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int sh(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  fprintf(stderr, "$ %s\n", cmd);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
-}
-
 static double results_psnr(const char *run, int iteration) {
   char path[4096], *text = NULL;
   size_t n;
@@ -73,11 +61,11 @@ int main(void) {
   train_files = count_entries(path);
 
   const char *common = "--iters 400 --black --random-points 5000 --seed 1 --quiet --checkpoint-every 100";
-  CHECK(sh("%s train %s -o %s %s", cli, data, run, common) == 0);
-  CHECK(sh("%s eval %s --no-images > %s/eval.txt", cli, run, tmp) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s %s", cli, data, run, common) == 0);
+  CHECK(mgs_test_sh("%s eval %s --no-images > %s/eval.txt", cli, run, tmp) == 0);
   double psnr = results_psnr(run, 400);
-  CHECK(sh("%s train %s -o %s %s --freeze", cli, data, frozen, common) == 0);
-  CHECK(sh("%s eval %s --no-images > /dev/null", cli, frozen) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s %s --freeze", cli, data, frozen, common) == 0);
+  CHECK(mgs_test_sh("%s eval %s --no-images > /dev/null", cli, frozen) == 0);
   double psnr_frozen = results_psnr(frozen, 400);
   fprintf(stderr, "test PSNR: trained %.2f dB, frozen %.2f dB, threshold %.1f\n", psnr, psnr_frozen, PSNR_THRESHOLD);
   CHECK(psnr > PSNR_THRESHOLD);
@@ -96,26 +84,26 @@ int main(void) {
   if (g) { CHECK(g->n > 0 && g->sh_degree == 3); mgs_gaussians_destroy(g); }
 
   /* render writes one PNG per test view */
-  CHECK(sh("%s render %s --split test -o %s", cli, run, renders) == 0);
+  CHECK(mgs_test_sh("%s render %s --split test -o %s", cli, run, renders) == 0);
   CHECK(count_entries(renders) == 8);
-  CHECK(sh("%s render %s --split test -o %s 2>/dev/null", cli, run, renders) != 0); /* not empty, no --force */
+  CHECK(mgs_test_sh("%s render %s --split test -o %s 2>/dev/null", cli, run, renders) != 0); /* not empty, no --force */
 
   /* never overwrite, never write into the dataset */
-  CHECK(sh("%s train %s -o %s %s 2>/dev/null", cli, data, run, common) != 0);
+  CHECK(mgs_test_sh("%s train %s -o %s %s 2>/dev/null", cli, data, run, common) != 0);
   snprintf(path, sizeof path, "%s/inner_run", data);
-  CHECK(sh("%s train %s -o %s %s 2>/dev/null", cli, data, path, common) != 0);
+  CHECK(mgs_test_sh("%s train %s -o %s %s 2>/dev/null", cli, data, path, common) != 0);
   CHECK(!mgs_path_exists(path));
   CHECK(count_entries(data) == data_files);
   snprintf(path, sizeof path, "%s/train", data);
   CHECK(count_entries(path) == train_files);
 
   /* resume extends the finished run (final checkpoint at 400) to a longer one */
-  CHECK(sh("%s train %s -o %s --iters 500 --black --random-points 5000 --seed 1 --quiet --resume", cli, data, run) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s --iters 500 --black --random-points 5000 --seed 1 --quiet --resume", cli, data, run) == 0);
   snprintf(path, sizeof path, "%s/point_cloud/iteration_500/point_cloud.ply", run);
   CHECK(mgs_path_exists(path));
 
   /* eval with side-by-side images: render | ground truth | error, one PNG per test view */
-  CHECK(sh("%s eval %s > /dev/null", cli, run) == 0);
+  CHECK(mgs_test_sh("%s eval %s > /dev/null", cli, run) == 0);
   snprintf(path, sizeof path, "%s/eval", run);
   CHECK(count_entries(path) == 8);
   CHECK(results_psnr(run, 500) > PSNR_THRESHOLD);
@@ -124,18 +112,18 @@ int main(void) {
      current .ply and exits with 130 */
   char sig[4400];
   snprintf(sig, sizeof sig, "%s/sigint", tmp);
-  CHECK(sh("%s train %s -o %s --iters 1000000 --black --random-points 5000 --quiet --checkpoint-every 0 > /dev/null 2>&1 & pid=$!; "
+  CHECK(mgs_test_sh("%s train %s -o %s --iters 1000000 --black --random-points 5000 --quiet --checkpoint-every 0 > /dev/null 2>&1 & pid=$!; "
            "for i in $(seq 1 600); do [ -f %s/cameras.json ] && break; sleep 0.1; done; sleep 1; kill -INT $pid; wait $pid; exit $?",
            cli, data, sig, sig) == 130);
   snprintf(path, sizeof path, "%s/checkpoint.mgsckpt", sig);
   CHECK(mgs_path_exists(path));
-  CHECK(sh("ls %s/point_cloud/iteration_*/point_cloud.ply > /dev/null", sig) == 0);
+  CHECK(mgs_test_sh("ls %s/point_cloud/iteration_*/point_cloud.ply > /dev/null", sig) == 0);
 
   /* MorseGS and Topology-GS flags out of range are refused clearly, before anything is
      written (usage error; tests/train/test_morse_cli.c and tests/topogs check them in detail) */
-  CHECK(sh("%s train %s -o %s/x --strategy morse --morse-every 0 2>/dev/null", cli, data, tmp) == 2);
-  CHECK(sh("%s train %s -o %s/x --topo-loss --beta -1 2>/dev/null", cli, data, tmp) == 2);
-  CHECK(sh("%s train %s -o %s/x --init nope 2>/dev/null", cli, data, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s -o %s/x --strategy morse --morse-every 0 2>/dev/null", cli, data, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s -o %s/x --topo-loss --beta -1 2>/dev/null", cli, data, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s -o %s/x --init nope 2>/dev/null", cli, data, tmp) == 2);
   snprintf(path, sizeof path, "%s/x", tmp);
   CHECK(!mgs_path_exists(path));
   return mgs_test_finish();

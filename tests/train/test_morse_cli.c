@@ -10,18 +10,6 @@
 
 static const char *cli;
 
-static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int sh(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  fprintf(stderr, "$ %s\n", cmd);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
-}
-
 static char *slurp(const char *dir, const char *name) {
   char path[4200], *text = NULL;
   size_t n;
@@ -45,9 +33,9 @@ int main(void) {
   snprintf(run, sizeof run, "%s/run-morse", tmp);
   snprintf(run2, sizeof run2, "%s/run-r", tmp);
   snprintf(bad, sizeof bad, "%s/run-bad", tmp);
-  CHECK(sh("%s scene --builtin genus2 -o %s --views 16 --test-views 2 --width 64 --height 64 --spp 1 -q", cli, data) == 0);
+  CHECK(mgs_test_sh("%s scene --builtin genus2 -o %s --views 16 --test-views 2 --width 64 --height 64 --spp 1 -q", cli, data) == 0);
   const char *common = "--iters 250 --morse-warmup 100 --morse-every 100 --morse-resolution 96 --checkpoint-every 0 --seed 1 --quiet --threads 2";
-  CHECK(sh("%s train %s -o %s --strategy morse --topo-loss %s", cli, data, run, common) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s --strategy morse --topo-loss %s", cli, data, run, common) == 0);
   char *csv = slurp(run, "morse_analysis.csv"), *cfg = slurp(run, "cfg_args"), *stats = slurp(run, "train_stats.json");
   CHECK(csv && !strncmp(csv, "iteration,s_alpha,s_sdf,s_persistence", 37));
   CHECK(count_lines(csv) == 3); /* header + analyses at 100 and 200 (the last iteration has no hooks) */
@@ -57,7 +45,7 @@ int main(void) {
   CHECK(stats && strstr(stats, "\"morse_analyses\":\t2"));
   free(csv); free(cfg); free(stats);
 
-  CHECK(sh("%s train %s -o %s --preset morse-r %s", cli, data, run2, common) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s --preset morse-r %s", cli, data, run2, common) == 0);
   cfg = slurp(run2, "cfg_args");
   CHECK(cfg && strstr(cfg, "preset='morse-r'") && strstr(cfg, "strategy='adc'") && strstr(cfg, "topo_loss='eliminate'"));
   free(cfg);
@@ -66,7 +54,7 @@ int main(void) {
      analyses run (a CSV row each) and the record names them */
   char run3[4200];
   snprintf(run3, sizeof run3, "%s/run-full", tmp);
-  CHECK(sh("%s train %s -o %s --preset morse-full %s", cli, data, run3, common) == 0);
+  CHECK(mgs_test_sh("%s train %s -o %s --preset morse-full %s", cli, data, run3, common) == 0);
   cfg = slurp(run3, "cfg_args");
   csv = slurp(run3, "morse_analysis.csv");
   CHECK(cfg && strstr(cfg, "preset='morse-full'") && strstr(cfg, "init='levelset'") && strstr(cfg, "normal_loss=0.01") &&
@@ -79,7 +67,7 @@ int main(void) {
                         "--topo-loss --morse-resolution 2048 --morse-warmup 2", "--topo-loss --morse-warmup 10",
                         "--spawn gaps", "--preset nope", "--topo-loss --topo-dims 5"};
   for (size_t k = 0; k < sizeof bads / sizeof *bads; k++) {
-    CHECK(sh("%s train %s -o %s %s --iters 5 --quiet 2> %s.err", cli, data, bad, bads[k], bad) == 2);
+    CHECK(mgs_test_sh("%s train %s -o %s %s --iters 5 --quiet 2> %s.err", cli, data, bad, bads[k], bad) == 2);
     CHECK(!mgs_path_exists(bad));
     char errp[4300], *e = NULL;
     size_t n;

@@ -9,16 +9,6 @@
 #include "core/mgs_core.h"
 #include "mgs_test.h"
 
-static int sh(const char *fmt, ...) {
-  char cmd[4096];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
 static int file_has(const char *path, const char *needle) {
   char *data = NULL;
   size_t n = 0;
@@ -33,9 +23,9 @@ int main(void) {
   if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
   const char *tmp = mgs_test_tmpdir("morse_grad_cli");
   char path[512];
-  CHECK(sh("%s scene --builtin genus2 -o %s/scene --views 4 --test-views 1 --width 24 --height 24 --spp 1 -q", cli, tmp) == 0);
+  CHECK(mgs_test_sh("%s scene --builtin genus2 -o %s/scene --views 4 --test-views 1 --width 24 --height 24 --spp 1 -q", cli, tmp) == 0);
   /* level-set init and the normal loss together (the term starts at half of 40 iterations) */
-  CHECK(sh("%s train %s/scene -o %s/run --iters 40 --init levelset --normal-loss 0.05 --quiet --save-at 1000 "
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/run --iters 40 --init levelset --normal-loss 0.05 --quiet --save-at 1000 "
            "--checkpoint-every 20 2> %s/log.txt", cli, tmp, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/log.txt", tmp);
   CHECK(file_has(path, "level-set init"));
@@ -45,27 +35,27 @@ int main(void) {
   snprintf(path, sizeof path, "%s/run/point_cloud/iteration_40/point_cloud.ply", tmp);
   CHECK(mgs_path_exists(path));
   /* --resume keeps the recorded weight (and loads the term's state from the checkpoint) */
-  CHECK(sh("%s train %s/scene -o %s/run --iters 60 --quiet --resume 2>/dev/null", cli, tmp, tmp) == 0);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/run --iters 60 --quiet --resume 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run/cfg_args", tmp);
   CHECK(file_has(path, "normal_loss=0.05"));
   /* the space-separated form and the bare flag */
-  CHECK(sh("%s train %s/scene -o %s/run2 --iters 4 --normal-loss 0.03 --quiet 2>/dev/null", cli, tmp, tmp) == 0);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/run2 --iters 4 --normal-loss 0.03 --quiet 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run2/cfg_args", tmp);
   CHECK(file_has(path, "normal_loss=0.03"));
-  CHECK(sh("%s train %s/scene -o %s/run3 --iters 4 --normal-loss --quiet 2>/dev/null", cli, tmp, tmp) == 0);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/run3 --iters 4 --normal-loss --quiet 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run3/cfg_args", tmp);
   CHECK(file_has(path, "normal_loss=0.02"));
   /* bad values: usage errors naming the flag, nothing written */
-  CHECK(sh("%s train %s/scene -o %s/bad --normal-loss=-1 2> %s/err.txt", cli, tmp, tmp, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --normal-loss=-1 2> %s/err.txt", cli, tmp, tmp, tmp) == 2);
   snprintf(path, sizeof path, "%s/err.txt", tmp);
   CHECK(file_has(path, "--normal-loss"));
-  CHECK(sh("%s train %s/scene -o %s/bad --normal-loss=0 2>/dev/null", cli, tmp, tmp) == 2);
-  CHECK(sh("%s train %s/scene -o %s/bad --init level 2>/dev/null", cli, tmp, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --normal-loss=0 2>/dev/null", cli, tmp, tmp) == 2);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --init level 2>/dev/null", cli, tmp, tmp) == 2);
   snprintf(path, sizeof path, "%s/bad", tmp);
   CHECK(!mgs_path_exists(path));
   /* a dataset without points */
-  CHECK(sh("rm -f %s/scene/points3d.ply", tmp) == 0);
-  CHECK(sh("%s train %s/scene -o %s/nopts --iters 4 --init levelset --quiet 2> %s/err2.txt", cli, tmp, tmp, tmp) != 0);
+  CHECK(mgs_test_sh("rm -f %s/scene/points3d.ply", tmp) == 0);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s/nopts --iters 4 --init levelset --quiet 2> %s/err2.txt", cli, tmp, tmp, tmp) != 0);
   snprintf(path, sizeof path, "%s/err2.txt", tmp);
   CHECK(file_has(path, "--init levelset"));
   return mgs_test_finish();

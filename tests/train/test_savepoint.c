@@ -16,21 +16,9 @@
 
 static const char *cli;
 
-static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int sh(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  fprintf(stderr, "$ %s\n", cmd);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
-}
-
 /* PSNR on the training views of RUN's model saved at `it`. */
 static double eval_train(const char *run, int it) {
-  if (sh("%s eval %s --iteration %d --split train --no-images > /dev/null", cli, run, it) != 0) return -1;
+  if (mgs_test_sh("%s eval %s --iteration %d --split train --no-images > /dev/null", cli, run, it) != 0) return -1;
   char path[4096], *text = NULL, key[64];
   size_t n;
   snprintf(path, sizeof path, "%s/results.json", run);
@@ -67,10 +55,10 @@ static void check_scene(const char *tmp, const char *name, const char *scene_arg
   char data[4200], run[4200];
   snprintf(data, sizeof data, "%s/%s-data", tmp, name);
   snprintf(run, sizeof run, "%s/%s-run", tmp, name);
-  CHECK(sh("%s scene %s -o %s --views 30 --test-views 4 --width 96 --height 96 --spp 2 -q", cli, scene_args, data) == 0);
+  CHECK(mgs_test_sh("%s scene %s -o %s --views 30 --test-views 4 --width 96 --height 96 --spp 2 -q", cli, scene_args, data) == 0);
   /* densification every 100 from 100, opacity reset every 300: 300 and 600 are reset and
      densification iterations, 500 a densification one */
-  CHECK(sh("%s train %s -o %s --iters 600 --densify-from 100 --densify-every 100 --opacity-reset-every 300 "
+  CHECK(mgs_test_sh("%s train %s -o %s --iters 600 --densify-from 100 --densify-every 100 --opacity-reset-every 300 "
            "--save-at 299,300,499,500,599 --checkpoint-every 0 --seed 2 --quiet --threads 2",
            cli, data, run) == 0);
   static const int at[] = {300, 500, 600};

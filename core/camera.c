@@ -87,6 +87,10 @@ void mgs_camera_resize(mgs_camera *cam, int w, int h) {
   cam->width = w; cam->height = h;
 }
 
+int mgs_camera_focal_valid(double f, int size) {
+  return size >= 1 && isfinite(f) && f >= 4e-4 * size && f <= 6e5 * size;
+}
+
 double mgs_camera_fovx(const mgs_camera *cam) { return 2.0 * atan(0.5 * cam->width / cam->fx); }
 double mgs_camera_fovy(const mgs_camera *cam) { return 2.0 * atan(0.5 * cam->height / cam->fy); }
 

@@ -45,6 +45,9 @@ static mgs_status check_camera(const char *path, cmp_camera *c, const double *pa
   if (c->model == 0) { c->params[0] = c->params[1] = params[0]; c->params[2] = params[1]; c->params[3] = params[2]; }
   else memcpy(c->params, params, sizeof(double) * 4);
   if (!(c->params[0] > 0 && c->params[1] > 0)) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: camera %u has a non-positive focal length", path, c->id);
+  if (!mgs_camera_focal_valid(c->params[0], c->width) || !mgs_camera_focal_valid(c->params[1], c->height))
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: camera %u has focal lengths %g, %g px for a %dx%d image (a field of view near 0 or 180 degrees)",
+                         path, c->id, c->params[0], c->params[1], c->width, c->height);
   return MGS_OK;
 }
 

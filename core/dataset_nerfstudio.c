@@ -94,6 +94,10 @@ mgs_status mgs_dataset_load_nerfstudio(mgs_dataset *d, const mgs_dataset_options
       st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: w and h must be positive integers", what);
       break;
     }
+    if (!mgs_camera_focal_valid(in[0], (int)in[4]) || !mgs_camera_focal_valid(in[1], (int)in[5])) {
+      st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: focal lengths %g, %g px for a %gx%g image (a field of view near 0 or 180 degrees)", what, in[0], in[1], in[4], in[5]);
+      break;
+    }
     const char *fp = NULL;
     if ((st = mgs_json_string(fr, "file_path", what, &fp, err)) != MGS_OK) break;
     if ((st = mgs_json_matrix4(fr, "transform_matrix", what, m, err)) != MGS_OK) break;

@@ -43,6 +43,10 @@ void mgs_camera_downscale(mgs_camera *cam, int factor);
 /* Intrinsics for the image resized to w x h with its whole extent kept (fields of view
  * and the principal point's relative position exact, whatever the ratio). */
 void mgs_camera_resize(mgs_camera *cam, int w, int h);
+/* A pinhole focal length in pixels that every later stage can use for an image side of
+ * `size` pixels: finite, a field of view between ~1e-4 and ~179.95 degrees (a file's
+ * 1e-300 would pass "> 0" and become 0 in a resize). */
+int mgs_camera_focal_valid(double f, int size);
 double mgs_camera_fovx(const mgs_camera *cam);
 double mgs_camera_fovy(const mgs_camera *cam);
 /* Look-at pose: camera at eye looking at target with world up vector. */

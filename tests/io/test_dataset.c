@@ -507,6 +507,14 @@ static void test_colmap_bad(void) {
   dir = make_colmap("io_cm_b12", 1, CM_GOOD);
   io_write_bytes(join(dir, "sparse/0/cameras.bin"), "\x01\0\0\0\0\0\0\0\x01\0\0\0\x63\0\0\0", 16);
   expect_load_fail(dir, 0, MGS_ERR_FORMAT, "cameras.bin", NULL);
+  /* fuzz_colmap_bin's finding: a focal length of 3.5e-323 px passed "> 0" and became 0
+     when the 33296 px wide image was resized to 1600 */
+  dir = make_colmap("io_cm_b13", 0, CM_GOOD);
+  io_write_text(join(dir, "sparse/0/cameras.txt"), "1 PINHOLE 16 12 3.5e-323 16 8 6\n");
+  expect_load_fail(dir, 0, MGS_ERR_FORMAT, "cameras.txt", "180 degrees");
+  dir = make_colmap("io_cm_b14", 0, CM_GOOD);
+  io_write_text(join(dir, "sparse/0/cameras.txt"), "1 PINHOLE 16 12 16 1e300 8 6\n");
+  expect_load_fail(dir, 0, MGS_ERR_FORMAT, "cameras.txt", "field of view");
 }
 
 int main(void) {

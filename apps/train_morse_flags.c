@@ -20,7 +20,7 @@ const char *train_morse_flags_usage =
     "      --strategy morse    Morse-guided densification with ADC as fallback\n"
     "      --spawn gaps|literal|none     (gaps)   --prune floaters|literal|none (floaters)\n"
     "      --topo-loss[=eliminate|literal]  persistence regularization (eliminate)\n"
-    "      --beta B (0.005)  --eps-sig E (0.02)  --eps-p E (0.01)  --topo-dims 0,1,2\n"
+    "      --beta B (0.003, in units of eps-sig squared)  --eps-sig E (0.02)  --eps-p E (0.01)  --topo-dims 0,1,2\n"
     "      --min-bar V         bars shorter than V voxels stay out of L_topo (0.5)\n"
     "      --morse-every K (500)  --morse-warmup W (3000)  --morse-until U (15000)\n"
     "      --morse-resolution R (128)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"

@@ -33,7 +33,7 @@ void mgs_morse_options_default(mgs_morse_options *o) {
   o->floater_mass = 0.01;
   o->min_cameras = 3;
   o->topo = MGS_MORSE_TOPO_NONE;
-  o->beta = 0.005;
+  o->beta = 0.003;
   o->dims = 0x7;
   o->min_bar = 0.5;
 }

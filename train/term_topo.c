@@ -9,7 +9,7 @@
  * those values, and its gradient goes to the Gaussians whose support reaches c through
  * ∂d/∂θ = −(∂A(c)/∂θ)/|∇A(c)| (mgs_morse_sdf_point_grad). Ends set by the band clamp are
  * constants. Bars in the loss are those with persistence in [min_bar voxels, ε_sig) at the
- * analysis (morse_in_loss). */
+ * analysis (morse_in_loss). The loss is measured in units of ε_sig² (scale-free β). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -161,7 +161,11 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
   }
   if (st == MGS_OK) {
     mgs_topo_loss_kind kind = o->topo == MGS_MORSE_TOPO_LITERAL ? MGS_TOPO_LOSS_LITERAL : MGS_TOPO_LOSS_ELIMINATE;
-    *loss = mgs_topo_loss(&d, kind, eps_sig, o->dims, dlb, dld);
+    /* in units of ε_sig², so β does not depend on the scene's scale (a bar of ε_sig
+       costs β whatever the units of the scene) */
+    double unit = 1.0 / (eps_sig * eps_sig);
+    *loss = unit * mgs_topo_loss(&d, kind, eps_sig, o->dims, dlb, dld);
+    for (size_t k = 0; k < r->n; k++) { dlb[k] *= unit; dld[k] *= unit; }
     if (short_pers)
       for (size_t k = 0; k < r->n; k++)
         if (d.pairs[k].dim < 3 && ((o->dims >> d.pairs[k].dim) & 1u)) *short_pers += fabs(d.pairs[k].death - d.pairs[k].birth);

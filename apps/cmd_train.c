@@ -36,6 +36,14 @@ static int morse_grad_parse_normal(const char *arg) {
 /* ---- end of the normal-loss / level-set block ---- */
 #include "apps/train_morse_flags.h" /* MorseGS flags (kept apart) */
 
+/* The normal loss reads the Morse analysis' SDF when one runs (none before the first). */
+static const mgs_vdb_grid *morse_sdf_source(void *user, int *iteration) {
+  const mgs_morse_ctx *c = user;
+  const mgs_morse_result *r = mgs_morse_ctx_result(c);
+  *iteration = r ? r->iteration : -1;
+  return r && r->iteration > 0 ? mgs_morse_ctx_sdf(c) : NULL;
+}
+
 static volatile sig_atomic_t g_stop = 0;
 /* Topology-GS flags (apps/train_topogs_flags.c): parsed before the option table */
 static mgs_topogs_flags g_topogs;
@@ -487,7 +495,9 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     no.gamma = g_normal_loss;
     if (o.iterations < 2 * no.from_iter) no.from_iter = o.iterations / 2 > 0 ? o.iterations / 2 : 1; /* short runs: the second half */
     mgs_term *nt = NULL;
-    if ((st = mgs_term_normal_create(&no, &nt, NULL, &err)) || (st = mgs_trainer_add_term(t, nt, &err))) goto done;
+    mgs_normal_term *nh = NULL;
+    if ((st = mgs_term_normal_create(&no, &nt, &nh, &err)) || (st = mgs_trainer_add_term(t, nt, &err))) goto done;
+    if (mctx) mgs_term_normal_set_source(nh, morse_sdf_source, mctx); /* ∇d of the last Morse analysis */
   }
   if (resume) {
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;

@@ -72,6 +72,12 @@ mgs_status mgs_term_normal_create(const mgs_normal_options *o, mgs_term **out, m
                                   mgs_error *err);
 /* Hands the term the SDF of an analysis made at `iteration` (deep-copied; LEVEL_SET grid). */
 mgs_status mgs_term_normal_set_sdf(mgs_normal_term *t, const mgs_vdb_grid *sdf, int iteration, mgs_error *err);
+/* Where the term takes its SDF from when an analysis runs beside it (MorseGS-Full: the
+ * Morse analysis' grid, issue 14 item 5): called every iteration the term runs; a grid
+ * made at another iteration than the one in use is copied in. With a source the term
+ * builds no grid of its own. fn returns NULL while there is none. */
+typedef const mgs_vdb_grid *(*mgs_normal_sdf_source)(void *user, int *iteration);
+void mgs_term_normal_set_source(mgs_normal_term *t, mgs_normal_sdf_source fn, void *user);
 /* The grid in use (NULL before the first), the iteration it was made at, builds made. */
 const mgs_vdb_grid *mgs_term_normal_sdf(const mgs_normal_term *t, int *iteration, int *builds);
 

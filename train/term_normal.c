@@ -145,6 +145,8 @@ struct mgs_normal_term {
   int32_t *ijk;       /* scratch: 64 voxels per refreshed row */
   float *vals;
   size_t refreshed;   /* rows recomputed so far (for the notes' cost figures) */
+  mgs_normal_sdf_source source; /* an analysis' grid (NULL: build our own) */
+  void *source_user;
 };
 
 static unsigned normal_active(void *self, int it) {
@@ -189,7 +191,14 @@ static mgs_status normal_model_grad(void *self, mgs_term_step *s, mgs_error *err
   mgs_normal_term *t = self;
   const mgs_gaussians *g = s->model;
   s->value = 0;
-  if (t->o.every > 0 && (t->sdf_iter < 0 || s->iteration - t->sdf_iter >= t->o.every)) {
+  if (t->source) {
+    int at = -1;
+    const mgs_vdb_grid *sdf = t->source(t->source_user, &at);
+    if (sdf && at != t->sdf_iter) {
+      mgs_status st = mgs_term_normal_set_sdf(t, sdf, at, err);
+      if (st) return st;
+    }
+  } else if (t->o.every > 0 && (t->sdf_iter < 0 || s->iteration - t->sdf_iter >= t->o.every)) {
     mgs_status st = build_sdf(t, g, s->iteration, err);
     if (st) return st;
   }
@@ -364,6 +373,11 @@ mgs_status mgs_term_normal_set_sdf(mgs_normal_term *t, const mgs_vdb_grid *sdf, 
   t->cached_n = 0;
   t->sdf_iter = iteration;
   return MGS_OK;
+}
+
+void mgs_term_normal_set_source(mgs_normal_term *t, mgs_normal_sdf_source fn, void *user) {
+  t->source = fn;
+  t->source_user = user;
 }
 
 const mgs_vdb_grid *mgs_term_normal_sdf(const mgs_normal_term *t, int *iteration, int *builds) {

@@ -171,6 +171,14 @@ static double run_term(mgs_term *term, const mgs_gaussians *g, int it, mgs_gauss
   return s.value;
 }
 
+typedef struct { const mgs_vdb_grid *grid; int at, calls; } src_state;
+static const mgs_vdb_grid *src_fn(void *user, int *iteration) {
+  src_state *ss = user;
+  ss->calls++;
+  *iteration = ss->at;
+  return ss->at > 0 ? ss->grid : NULL;
+}
+
 static void test_term_sphere(void) {
   mgs_normal_options o;
   mgs_normal_options_default(&o);
@@ -269,6 +277,33 @@ static void test_term_sphere(void) {
     CHECK(memcmp(g1->rot, g2->rot, 4 * n * sizeof(float)) == 0);
     mgs_gaussians_destroy(g1);
     mgs_gaussians_destroy(g2);
+  }
+  /* a source (the Morse analysis' grid in training): the term copies each new grid in,
+     builds none of its own, and gives the value of a term that built the same grid */
+  {
+    src_state ss = {mgs_term_normal_sdf(h, NULL, NULL), -1, 0};
+    mgs_term *t4 = NULL;
+    mgs_normal_term *h4 = NULL;
+    mgs_normal_options o4 = o;
+    o4.every = 1; /* would rebuild every iteration without the source */
+    CHECK_OK(mgs_term_normal_create(&o4, &t4, &h4, &err), &err);
+    if (t4) {
+      mgs_term_normal_set_source(h4, src_fn, &ss);
+      mgs_gaussians *g4 = model(n), *g1 = model(n);
+      CHECK(run_term(t4, bad, 5, g4) == 0 && mgs_term_normal_sdf(h4, NULL, NULL) == NULL); /* none yet */
+      ss.at = 3;
+      double a4 = run_term(t4, bad, 6, g4), a1 = run_term(term, bad, 6, g1);
+      run_term(t4, bad, 7, g4);
+      int at4, b4;
+      CHECK(mgs_term_normal_sdf(h4, &at4, &b4) != NULL && at4 == 3 && b4 == 0 && ss.calls == 3);
+      CHECK(fabs(a4 - a1) < 1e-12);
+      ss.at = 9; /* a newer analysis: taken at the next call */
+      run_term(t4, bad, 9, g4);
+      CHECK(mgs_term_normal_sdf(h4, &at4, &b4) != NULL && at4 == 9 && b4 == 0);
+      mgs_gaussians_destroy(g4);
+      mgs_gaussians_destroy(g1);
+      mgs_term_destroy(t4);
+    }
   }
   /* bad options: one line naming the flag */
   o.gamma = -1;

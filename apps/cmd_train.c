@@ -450,7 +450,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
       lo.seed = seed;
       mgs_levelset_info li;
       st = mgs_init_levelset(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &lo, &g0, &li, &err);
-      if (!st) mgs_info("level-set init: %zu Gaussians from %zu points (voxel %.4g, delta %.4g, %.2f s)", g0->n, ds->init_points->n, li.voxel_size, li.delta, li.seconds);
+      if (!st) mgs_info("level-set init: %zu Gaussians from %zu points (%zu far outliers left out; voxel %.4g, delta %.4g, %.2f s)", g0->n, ds->init_points->n, li.outliers, li.voxel_size, li.delta, li.seconds);
     }
   } else if (!strcmp(init, "sfm") && ds->init_points && ds->init_points->n > 0) {
     st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &g0, &err);

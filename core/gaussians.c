@@ -143,6 +143,44 @@ void mgs_gaussian_covariance(const mgs_gaussians *g, size_t i, double cov[9]) {
       cov[3*a+b] = R[3*a]*R[3*b]*s2[0] + R[3*a+1]*R[3*b+1]*s2[1] + R[3*a+2]*R[3*b+2]*s2[2];
 }
 
+static int cmp_float(const void *a, const void *b) {
+  float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+int mgs_points_bounds_robust(const float *xyz, size_t n, double lo[3], double hi[3]) {
+  if (n == 0) return 0;
+  for (int k = 0; k < 3; k++) lo[k] = hi[k] = xyz[k];
+  for (size_t i = 1; i < n; i++)
+    for (int k = 0; k < 3; k++) {
+      double v = xyz[3 * i + k];
+      if (v < lo[k]) lo[k] = v;
+      if (v > hi[k]) hi[k] = v;
+    }
+  if (n < 200) return 1;
+  size_t stride = n > 65536 ? n / 65536 : 1, m = (n + stride - 1) / stride;
+  float *v = malloc(m * sizeof(float));
+  if (!v) return 1; /* the true box: correct, only not robust */
+  double qlo[3], qhi[3], ext = 0;
+  for (int k = 0; k < 3; k++) {
+    for (size_t j = 0; j < m; j++) v[j] = xyz[3 * (j * stride) + k];
+    qsort(v, m, sizeof(float), cmp_float);
+    qlo[k] = v[(size_t)floor(0.005 * (double)(m - 1))];
+    qhi[k] = v[(size_t)ceil(0.995 * (double)(m - 1))];
+    if (qhi[k] - qlo[k] > ext) ext = qhi[k] - qlo[k];
+  }
+  free(v);
+  for (int k = 0; k < 3; k++) {
+    lo[k] = fmax(lo[k], qlo[k] - 0.1 * ext);
+    hi[k] = fmin(hi[k], qhi[k] + 0.1 * ext);
+  }
+  return 1;
+}
+
+int mgs_point_in_box(const float *p, const double lo[3], const double hi[3]) {
+  return p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2];
+}
+
 int mgs_gaussians_bounds(const mgs_gaussians *g, double lo[3], double hi[3]) {
   if (g->n == 0) return 0;
   for (int k = 0; k < 3; k++) lo[k] = hi[k] = g->mean[k];

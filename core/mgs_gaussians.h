@@ -72,6 +72,14 @@ void mgs_gaussian_scale(const mgs_gaussians *g, size_t i, float s[3]); /* exp(lo
 void mgs_gaussian_covariance(const mgs_gaussians *g, size_t i, double cov[9]);
 /* Axis-aligned bounding box of all means. Returns 0 for an empty model. */
 int mgs_gaussians_bounds(const mgs_gaussians *g, double lo[3], double hi[3]);
+/* A box that far outliers do not stretch (real SfM clouds hold two-view points 10x the
+ * object's size away): per axis the 0.5 % and 99.5 % quantiles (of at most 65536 evenly
+ * strided points), widened by 10 % of the largest quantile extent, clipped to the true
+ * min/max — a compact cloud keeps its full box. Fewer than 200 points: the true box.
+ * Returns 0 for n = 0. */
+int mgs_points_bounds_robust(const float *xyz, size_t n, double lo[3], double hi[3]);
+/* 1 when p lies in [lo, hi] on every axis. */
+int mgs_point_in_box(const float *p, const double lo[3], const double hi[3]);
 
 /* Generic row operations on an array of `dim` floats per row (used for Adam moments). */
 size_t mgs_rows_compact(float *data, size_t n, int dim, const uint8_t *keep);

@@ -369,9 +369,8 @@ static mgs_status build_field(const float *xyz, const float *nrm, size_t n, doub
 }
 
 /* ---------------------------------------------------------------- the initialization */
-mgs_status mgs_init_levelset(const float *xyz, const float *rgb, size_t n, int sh_degree, const mgs_levelset_options *oin,
-                             mgs_gaussians **out, mgs_levelset_info *info_out, mgs_error *err) {
-  *out = NULL;
+static mgs_status init_levelset(const float *xyz, const float *rgb, size_t n, int sh_degree, const mgs_levelset_options *oin,
+                                mgs_gaussians **out, mgs_levelset_info *info_out, mgs_error *err) {
   const double t0 = mgs_now();
   mgs_levelset_options o;
   if (oin) o = *oin; else mgs_levelset_options_default(&o);
@@ -489,4 +488,33 @@ mgs_status mgs_init_levelset(const float *xyz, const float *rgb, size_t n, int s
   if (info_out) *info_out = info;
   *out = g;
   return MGS_OK;
+}
+
+/* Scale and field come from a box far outliers do not stretch (real SfM clouds hold
+ * two-view points 10x the object's size away: the voxel was 9x too coarse); the points
+ * outside it are left out. */
+mgs_status mgs_init_levelset(const float *xyz, const float *rgb, size_t n, int sh_degree, const mgs_levelset_options *o,
+                             mgs_gaussians **out, mgs_levelset_info *info_out, mgs_error *err) {
+  *out = NULL;
+  for (size_t i = 0; i < 3 * n; i++)
+    if (!isfinite(xyz[i])) return mgs_error_set(err, MGS_ERR_NUMERIC, "--init levelset: initial point %zu is not finite", i / 3);
+  double lo[3], hi[3];
+  if (!mgs_points_bounds_robust(xyz, n, lo, hi)) return init_levelset(xyz, rgb, n, sh_degree, o, out, info_out, err);
+  float *pin = malloc((3 * n + 3) * sizeof(float)), *cin = rgb ? malloc((3 * n + 3) * sizeof(float)) : NULL;
+  if (!pin || (rgb && !cin)) { free(pin); free(cin); return mgs_error_set(err, MGS_ERR_NOMEM, "--init levelset: out of memory"); }
+  size_t m = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (!mgs_point_in_box(xyz + 3 * i, lo, hi)) continue;
+    memcpy(pin + 3 * m, xyz + 3 * i, 3 * sizeof(float));
+    if (cin) memcpy(cin + 3 * m, rgb + 3 * i, 3 * sizeof(float));
+    m++;
+  }
+  mgs_levelset_info info;
+  memset(&info, 0, sizeof info);
+  mgs_status st = init_levelset(pin, cin, m, sh_degree, o, out, &info, err);
+  info.outliers = n - m;
+  if (st == MGS_OK && info_out) *info_out = info;
+  free(pin);
+  free(cin);
+  return st;
 }

@@ -50,6 +50,7 @@ typedef struct mgs_levelset_info {
   double area[16];       /* area of each level set, k = −levels..levels (first 16) */
   size_t per_level[16];  /* Gaussians placed on each */
   double seconds;
+  size_t outliers;       /* input points outside the robust box (mgs_points_bounds_robust), left out */
 } mgs_levelset_info;
 
 /* Input points xyz[n*3], colours rgb[n*3] in [0,1] (may be NULL: grey). Fails with a

@@ -241,8 +241,21 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
   }
   c->sub = mgs_gaussians_select(g, map, m);
   if (!c->sub) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
+  /* the grid's scale from a box far outliers do not stretch (real SfM: a few two-view
+     points 10x away made the voxel 9x too coarse, the hinge a blob); what lies outside
+     is left out of the analysis (ADC still sees it) */
   double lo[3], hi[3];
-  mgs_gaussians_bounds(c->sub, lo, hi);
+  mgs_points_bounds_robust(c->sub->mean, c->sub->n, lo, hi);
+  size_t kept = 0;
+  for (size_t j = 0; j < m; j++)
+    if (mgs_point_in_box(c->sub->mean + 3 * j, lo, hi)) map[kept++] = map[j];
+  if (kept < m) {
+    mgs_gaussians_destroy(c->sub);
+    m = kept;
+    c->r.gaussians_used = m;
+    c->sub = mgs_gaussians_select(g, map, m);
+    if (!c->sub) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
+  }
   double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
   if (!(diag > 0)) diag = 1e-3;
   double h = diag / o->resolution;

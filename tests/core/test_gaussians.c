@@ -77,7 +77,43 @@ static void test_covariance_and_finite(void) {
   mgs_gaussians_destroy(g);
 }
 
+static void test_robust_bounds(void) {
+  /* a unit cube's surface sample: the robust box is the true box (compact cloud) */
+  const size_t n = 5000;
+  float *p = malloc((n + 5) * 3 * sizeof(float));
+  mgs_rng r;
+  mgs_rng_init(&r, 3, 0);
+  for (size_t i = 0; i < n; i++) {
+    for (int k = 0; k < 3; k++) p[3 * i + k] = (float)mgs_rng_uniform(&r);
+    int face = (int)(i % 6);
+    p[3 * i + face / 2] = (float)(face % 2);
+  }
+  double lo[3], hi[3], tlo[3], thi[3];
+  CHECK(mgs_points_bounds_robust(p, n, lo, hi));
+  for (int k = 0; k < 3; k++) { CHECK(lo[k] == 0.0); CHECK(hi[k] == 1.0); }
+  /* five points 10-50 units away do not stretch it; the true box does */
+  for (size_t k = 0; k < 5; k++)
+    for (int a = 0; a < 3; a++) p[3 * (n + k) + a] = (float)((a == (int)(k % 3)) ? (k % 2 ? 10.0 + 10 * k : -10.0 - 10 * k) : 0.5);
+  CHECK(mgs_points_bounds_robust(p, n + 5, lo, hi));
+  mgs_gaussians g = {0};
+  g.n = n + 5;
+  g.mean = p;
+  CHECK(mgs_gaussians_bounds(&g, tlo, thi));
+  for (int k = 0; k < 3; k++) { /* the quantiles widened by 10 % of the extent */
+    CHECK(lo[k] >= -0.11 && lo[k] <= 0.0);
+    CHECK(hi[k] >= 1.0 && hi[k] <= 1.11);
+  }
+  CHECK(thi[0] > 40 || tlo[0] < -40 || thi[1] > 40 || tlo[1] < -40);
+  CHECK(mgs_point_in_box(p, lo, hi) && !mgs_point_in_box(p + 3 * n, lo, hi));
+  /* few points: the true box; none: 0 */
+  CHECK(mgs_points_bounds_robust(p + 3 * (n - 10), 15, lo, hi));
+  CHECK(hi[0] >= 10 || lo[0] <= -10 || hi[1] >= 10 || lo[1] <= -10 || hi[2] >= 10 || lo[2] <= -10);
+  CHECK(!mgs_points_bounds_robust(p, 0, lo, hi));
+  free(p);
+}
+
 int main(void) {
+  RUN(test_robust_bounds);
   RUN(test_append_compact_select);
   RUN(test_covariance_and_finite);
   return mgs_test_finish();

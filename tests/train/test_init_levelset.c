@@ -113,6 +113,38 @@ static void test_sphere_init(void) {
   free(rgb);
 }
 
+/* Real SfM clouds carry a few two-view points far away (COLMAP on netgen-doc's hinge:
+   7 of 1840 up to 10x the object's size): they must not set the voxel size. */
+static void test_far_outliers(void) {
+  const size_t n = 4000, extra = 7;
+  float *xyz = malloc((n + extra) * 3 * sizeof(float)), *rgb = malloc((n + extra) * 3 * sizeof(float));
+  const double ctr[3] = {0, 0, 0};
+  sphere_points(n, 1.0, ctr, 0.01, xyz, rgb, 11);
+  mgs_levelset_options o;
+  mgs_levelset_options_default(&o);
+  o.resolution = 64;
+  o.count = 3000;
+  mgs_gaussians *g0 = NULL, *g1 = NULL;
+  mgs_levelset_info i0, i1;
+  mgs_error err;
+  CHECK_OK(mgs_init_levelset(xyz, rgb, n, 0, &o, &g0, &i0, &err), &err);
+  for (size_t k = 0; k < extra; k++) { /* 10-30 units out, in several directions */
+    float *p = xyz + 3 * (n + k);
+    p[0] = (float)((k % 2 ? 1 : -1) * (10.0 + 3 * k)); p[1] = (float)(k % 3) * 5.0f; p[2] = (float)(k % 2 ? 20 : -8);
+    rgb[3 * (n + k)] = rgb[3 * (n + k) + 1] = rgb[3 * (n + k) + 2] = 0.5f;
+  }
+  CHECK_OK(mgs_init_levelset(xyz, rgb, n + extra, 0, &o, &g1, &i1, &err), &err);
+  fprintf(stderr, "  voxel without outliers %.4f, with %zu far points %.4f (%zu left out)\n", i0.voxel_size, extra, i1.voxel_size, i1.outliers);
+  CHECK(i0.outliers == 0);
+  CHECK(i1.outliers == extra);
+  CHECK_NEAR(i1.voxel_size, i0.voxel_size, 1e-9);
+  if (g1) for (size_t i = 0; i < g1->n; i++) CHECK(fabsf(g1->mean[3 * i]) < 1.2f && fabsf(g1->mean[3 * i + 2]) < 1.2f);
+  mgs_gaussians_destroy(g0);
+  mgs_gaussians_destroy(g1);
+  free(xyz);
+  free(rgb);
+}
+
 static void test_bad_input(void) {
   float xyz[30] = {0};
   mgs_gaussians *g = NULL;
@@ -135,6 +167,7 @@ static void test_bad_input(void) {
 int main(void) {
   RUN(test_normals);
   RUN(test_sphere_init);
+  RUN(test_far_outliers);
   RUN(test_bad_input);
   return mgs_test_finish();
 }

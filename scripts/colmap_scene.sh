@@ -18,11 +18,13 @@
 #
 # Environment (defaults in brackets):
 #   MORSEGS   the CLI [build/apps/morsegs of this checkout]
-#   VIEWS     images rendered in total, train + test of the render merged [64]
+#   VIEWS     images rendered in total, train + test of the render merged [48]
 #   SIZE      image width = height in pixels [300]
-#   SCENE_ARGS  extra `morsegs scene` flags [--texture-scale 4: at the default scale the
-#             procedural texture is smooth and SIFT finds ~80 features a view, too few for
-#             the mapper; at 4, ~500]
+#   SCENE_ARGS  extra `morsegs scene` flags [--texture-scale 4 --hemisphere. Texture: at the
+#             default scale the procedural texture is smooth and SIFT finds ~80 features a
+#             view, too few for the mapper; at 4, ~550. Hemisphere: on the hinge (a plate),
+#             views of the two faces share almost no features, so a full sphere of 64 views
+#             registered only the 24 seeing the upper face]
 #   CAMERA    camera model COLMAP estimates before undistortion [OPENCV]
 #   INTRINSICS  known: COLMAP starts from the renders' true focal length and principal point
 #             (a calibrated camera; it still refines them and estimates every pose and point);
@@ -45,9 +47,9 @@ command -v colmap >/dev/null || die "colmap not found: install it (apt-get insta
 command -v oiiotool >/dev/null || die "oiiotool not found: install openimageio-tools"
 MORSEGS=${MORSEGS:-$here/build/apps/morsegs}
 [ -x "$MORSEGS" ] || die "$MORSEGS: not built (scripts/build.sh build, or set MORSEGS)"
-SIFT_ARGS=${SIFT_ARGS:-}; SCENE_ARGS=${SCENE_ARGS---texture-scale 4}
+SIFT_ARGS=${SIFT_ARGS:-}; SCENE_ARGS=${SCENE_ARGS---texture-scale 4 --hemisphere}
 INTRINSICS=${INTRINSICS:-known}
-VIEWS=${VIEWS:-64}; SIZE=${SIZE:-300}; CAMERA=${CAMERA:-OPENCV}; THREADS=${THREADS:-1}
+VIEWS=${VIEWS:-48}; SIZE=${SIZE:-300}; CAMERA=${CAMERA:-OPENCV}; THREADS=${THREADS:-1}
 if [ -e "$out" ] && [ -n "$(ls -A "$out" 2>/dev/null)" ]; then die "$out: exists and is not empty"; fi
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
@@ -101,7 +103,7 @@ for m in "$out/distorted/sparse"/*/; do
   n=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p' | head -1)
   [ "${n:-0}" -gt "$best_n" ] && { best=$m; best_n=${n:-0}; }
 done
-[ -n "$best" ] || die "the mapper reconstructed nothing (too few features or matches? see $log; try SIZE=400 or SCENE_ARGS=--specular)"
+[ -n "$best" ] || die "the mapper reconstructed nothing (too few features or matches? see $log; try more VIEWS, a larger SIZE or a higher --texture-scale in SCENE_ARGS)"
 
 # 3. Undistortion to PINHOLE (the loader reads only PINHOLE/SIMPLE_PINHOLE), as convert.py.
 run image_undistorter --image_path "$out/input" --input_path "$best" --output_path "$out" --output_type COLMAP

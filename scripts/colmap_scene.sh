@@ -33,6 +33,10 @@
 #             cannot initialize from (config PLANAR_OR_PANORAMIC in the database).
 #   THREADS   COLMAP threads [1]
 #   SIFT_ARGS extra feature_extractor flags [none]
+#   MIN_TRACK_LEN  when set, `colmap point_filtering --min_track_len N` on the final model
+#             [unset: COLMAP's output as convert.py leaves it]. Two-view points include a few
+#             far outliers (on the hinge, 7 of 1840 points lie 2-20x the object's radius
+#             away), which stretch the points' bounding box; see docs/notes-colmap.md
 #
 # Needs the Debian package `colmap` (3.8 in bookworm; CPU only here: *.use_gpu 0) and
 # oiiotool (openimageio-tools). Not part of the test suite.
@@ -49,6 +53,7 @@ MORSEGS=${MORSEGS:-$here/build/apps/morsegs}
 [ -x "$MORSEGS" ] || die "$MORSEGS: not built (scripts/build.sh build, or set MORSEGS)"
 SIFT_ARGS=${SIFT_ARGS:-}; SCENE_ARGS=${SCENE_ARGS---texture-scale 4 --hemisphere}
 INTRINSICS=${INTRINSICS:-known}
+case $INTRINSICS in known|estimate) ;; *) die "INTRINSICS must be known or estimate (got $INTRINSICS)" ;; esac
 VIEWS=${VIEWS:-48}; SIZE=${SIZE:-300}; CAMERA=${CAMERA:-OPENCV}; THREADS=${THREADS:-1}
 if [ -e "$out" ] && [ -n "$(ls -A "$out" 2>/dev/null)" ]; then die "$out: exists and is not empty"; fi
 mkdir -p "$out"
@@ -110,6 +115,9 @@ run image_undistorter --image_path "$out/input" --input_path "$best" --output_pa
 mkdir -p "$out/sparse/0"
 for f in "$out/sparse"/*; do [ "$f" = "$out/sparse/0" ] || mv "$f" "$out/sparse/0/"; done
 rm -rf "$out/stereo" "$out"/run-colmap-*.sh
+if [ -n "${MIN_TRACK_LEN:-}" ]; then
+  run point_filtering --input_path "$out/sparse/0" --output_path "$out/sparse/0" --min_track_len "$MIN_TRACK_LEN"
+fi
 colmap model_analyzer --path "$out/sparse/0" > "$out/model_stats.txt" 2>&1
 echo "colmap_scene.sh: $out: $(sed -n 's/.*\(Registered images: *[0-9]*\).*/\1/p' "$out/model_stats.txt") of $VIEWS," \
   "$(sed -n 's/.*\(Points: *[0-9]*\).*/\1/p' "$out/model_stats.txt"), $(sed -n 's/.*\(Mean reprojection error: *[0-9.]*px\).*/\1/p' "$out/model_stats.txt")"

@@ -37,6 +37,8 @@ static void scene_usage(FILE *f) {
           "      --radius R        camera distance (default: fit the object)\n"
           "      --hemisphere      cameras on the upper hemisphere only (default: full sphere)\n"
           "      --specular        add a Blinn-Phong highlight (view-dependent colour)\n"
+          "      --texture-scale F finer (F > 1) or coarser procedural texture (1); F = 4 gives SIFT\n"
+          "                        enough corners for COLMAP (scripts/colmap_scene.sh)\n"
           "      --spp N           N x N antialiasing samples per pixel (4)\n"
           "      --white, --black  background colour under transparent pixels (white)\n"
           "      --init MODE       initial points: surface (noisy surface samples, SfM stand-in),\n"
@@ -75,7 +77,7 @@ static void list_builtins(void) {
 }
 
 enum { OPT_BUILTIN = 256, OPT_DETAIL, OPT_LIST, OPT_VIEWS, OPT_TEST_VIEWS, OPT_WIDTH, OPT_HEIGHT, OPT_FOV, OPT_RADIUS,
-       OPT_HEMI, OPT_SPEC, OPT_SPP, OPT_WHITE, OPT_BLACK, OPT_INIT, OPT_INIT_POINTS, OPT_INIT_NOISE, OPT_SEED,
+       OPT_HEMI, OPT_SPEC, OPT_TEXTURE, OPT_SPP, OPT_WHITE, OPT_BLACK, OPT_INIT, OPT_INIT_POINTS, OPT_INIT_NOISE, OPT_SEED,
        OPT_ALLOW_OPEN, OPT_FORCE, OPT_SIZE };
 
 int mgs_cmd_scene(int argc, char **argv) {
@@ -87,6 +89,7 @@ int mgs_cmd_scene(int argc, char **argv) {
       {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT},
       {"fov", required_argument, 0, OPT_FOV}, {"radius", required_argument, 0, OPT_RADIUS},
       {"hemisphere", no_argument, 0, OPT_HEMI}, {"specular", no_argument, 0, OPT_SPEC},
+      {"texture-scale", required_argument, 0, OPT_TEXTURE},
       {"spp", required_argument, 0, OPT_SPP}, {"white", no_argument, 0, OPT_WHITE}, {"black", no_argument, 0, OPT_BLACK},
       {"init", required_argument, 0, OPT_INIT}, {"init-points", required_argument, 0, OPT_INIT_POINTS},
       {"init-noise", required_argument, 0, OPT_INIT_NOISE}, {"seed", required_argument, 0, OPT_SEED},
@@ -99,8 +102,8 @@ int mgs_cmd_scene(int argc, char **argv) {
   int list = 0, views_set = 0, test_set = 0;
   optind = 1;
   opterr = 0;
-  int c;
-  while ((c = getopt_long(argc, argv, ":o:qh", longopts, NULL)) != -1) {
+  int c, li = -1;
+  while ((li = -1, c = getopt_long(argc, argv, ":o:qh", longopts, &li)) != -1) {
     long lv = 0;
     double dv = 0;
     int ok = 1;
@@ -120,6 +123,7 @@ int mgs_cmd_scene(int argc, char **argv) {
     case OPT_RADIUS: ok = parse_double(optarg, &dv) && dv > 0; o.radius = dv; break;
     case OPT_HEMI: o.hemisphere = 1; break;
     case OPT_SPEC: o.specular = 1; break;
+    case OPT_TEXTURE: ok = parse_double(optarg, &dv) && dv > 0 && dv <= 1000; o.texture_scale = dv; break;
     case OPT_SPP: ok = parse_long(optarg, 1, 16, &lv); o.spp = (int)lv; break;
     case OPT_WHITE: o.white_background = 1; break;
     case OPT_BLACK: o.white_background = 0; break;
@@ -145,7 +149,8 @@ int mgs_cmd_scene(int argc, char **argv) {
     default: fprintf(stderr, "morsegs scene: unknown option %s\n", argv[optind - 1]); scene_usage(stderr); return 2;
     }
     if (!ok) {
-      fprintf(stderr, "morsegs scene: bad value '%s' for %s\n", optarg, argv[optind - 1]);
+      /* argv[optind - 1] is the value itself when it came as a separate argument */
+      fprintf(stderr, "morsegs scene: bad value '%s' for --%s\n", optarg, li >= 0 ? longopts[li].name : "?");
       return 2;
     }
   }

@@ -32,6 +32,8 @@ typedef struct mgs_scene_options {
   double radius;           /* camera distance from the origin; 0 = fit the bounding sphere */
   int hemisphere;          /* 1: cameras on the upper (z > 0) hemisphere only */
   int specular;            /* 1: add a Blinn-Phong highlight (view-dependent colour) */
+  double texture_scale;    /* the albedo is evaluated at texture_scale x position (1): finer
+                              texture gives feature detectors (COLMAP's SIFT) corners to find */
   int spp;                 /* supersampling: spp x spp stratified samples per pixel (4) */
   int white_background;    /* RGB stored under alpha = 0 and recorded in the JSON (1) */
   mgs_scene_init init;     /* initial point cloud written as points3d.ply (SURFACE) */

@@ -24,6 +24,7 @@ void mgs_scene_options_default(mgs_scene_options *o) {
   o->height = 200;
   o->fovx = 0.6911112070083618; /* NeRF-synthetic's camera_angle_x */
   o->spp = 4;
+  o->texture_scale = 1.0;
   o->white_background = 1;
   o->init = MGS_SCENE_INIT_SURFACE;
   o->init_noise = 0.01;
@@ -63,6 +64,8 @@ static mgs_status check_options(const mgs_scene_options *o, mgs_error *err) {
   if (!(o->fovx > 0.01 && o->fovx < 3.1))
     return mgs_error_set(err, MGS_ERR_ARG, "scene: field of view %g rad out of range", o->fovx);
   if (o->spp < 1 || o->spp > 16) return mgs_error_set(err, MGS_ERR_ARG, "scene: --spp %d out of range (1..16)", o->spp);
+  if (!(o->texture_scale > 0 && o->texture_scale <= 1000))
+    return mgs_error_set(err, MGS_ERR_ARG, "scene: --texture-scale %g out of range (0 < F <= 1000)", o->texture_scale);
   if (!(o->radius >= 0) || !isfinite(o->radius)) return mgs_error_set(err, MGS_ERR_ARG, "scene: bad camera radius %g", o->radius);
   if (!(o->init_noise >= 0) || !isfinite(o->init_noise)) return mgs_error_set(err, MGS_ERR_ARG, "scene: bad init noise %g", o->init_noise);
   if (o->init != MGS_SCENE_INIT_NONE && o->init != MGS_SCENE_INIT_RANDOM && o->init != MGS_SCENE_INIT_SURFACE)
@@ -197,7 +200,8 @@ static mgs_status make_init_points(const mgs_mesh *m, const mgs_scene_options *o
     double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
     float p[3];
     for (int k = 0; k < 3; k++) p[k] = (float)(wa * a[k] + wb * b[k] + wc * c[k]);
-    mgs_scene_albedo(p, pc->rgb + 3 * i);
+    float ts = (float)o->texture_scale, pt[3] = {p[0] * ts, p[1] * ts, p[2] * ts};
+    mgs_scene_albedo(pt, pc->rgb + 3 * i);
     for (int k = 0; k < 3; k++) pc->xyz[3 * i + k] = (float)(p[k] + sigma * mgs_rng_normal(&rng));
   }
   free(cdf);
@@ -221,6 +225,7 @@ static mgs_status write_scene_record(const char *path, const mgs_mesh *m, const 
   cJSON_AddNumberToObject(root, "camera_radius", radius);
   cJSON_AddBoolToObject(root, "hemisphere", o->hemisphere != 0);
   cJSON_AddBoolToObject(root, "specular", o->specular != 0);
+  cJSON_AddNumberToObject(root, "texture_scale", o->texture_scale);
   cJSON_AddNumberToObject(root, "spp", o->spp);
   cJSON_AddStringToObject(root, "background", o->white_background ? "white" : "black");
   cJSON_AddStringToObject(root, "init", init_names[o->init]);

@@ -235,7 +235,8 @@ static void render_rows(void *vctx, size_t y0, size_t y1) {
         if (!(nl > 0)) { n[0] = -d[0]; n[1] = -d[1]; n[2] = -d[2]; nl = 1; back = 1.0f; }
         n[0] *= back / nl; n[1] *= back / nl; n[2] *= back / nl;
         float view[3] = {-d[0], -d[1], -d[2]}, rgb[3];
-        mgs_scene_shade(p, n, view, job->o->specular, rgb);
+        float ts = (float)job->o->texture_scale, pt[3] = {p[0] * ts, p[1] * ts, p[2] * ts}; /* only the albedo reads p */
+        mgs_scene_shade(pt, n, view, job->o->specular, rgb);
         sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
         hits++;
       }

@@ -106,6 +106,12 @@ static void test_usage_errors(void) {
   CHECK(run(args) == 2);
   snprintf(args, sizeof args, "scene --builtin sphere -o '%s/x' --bogus", root);
   CHECK(run(args) == 2);
+  const char *scales[] = {"0", "-1", "nan", "inf", "1e9", "x"};
+  for (int i = 0; i < 6; i++) {
+    snprintf(args, sizeof args, "scene --builtin sphere -o '%s/x' --texture-scale %s", root, scales[i]);
+    CHECK_MSG(run(args) == 2, "--texture-scale %s accepted", scales[i]);
+    CHECK(file_contains(log_path, "--texture-scale"));
+  }
   char p[2048];
   snprintf(p, sizeof p, "%s/x", root);
   CHECK(!mgs_path_exists(p));

@@ -128,6 +128,53 @@ static void test_specular_and_texture(void) {
   mgs_mesh_destroy(m);
 }
 
+/* Mean |green difference| of horizontally adjacent pixels both inside the silhouette:
+   texture detail (shading varies slowly across a pixel at this size). */
+static double detail(const mgs_image *im, size_t *pairs) {
+  double s = 0;
+  size_t n = 0;
+  for (int y = 0; y < im->height; y++)
+    for (int x = 0; x + 1 < im->width; x++) {
+      const float *a = im->data + 4 * ((size_t)y * im->width + x), *b = a + 4;
+      if (a[3] == 1 && b[3] == 1) { s += fabs(a[1] - b[1]); n++; }
+    }
+  *pairs = n;
+  return n ? s / n : 0;
+}
+
+/* --texture-scale: same silhouette, finer texture; out-of-range values are refused. */
+static void test_texture_scale(void) {
+  mgs_mesh *m = normalized("sphere");
+  if (!m) return;
+  mgs_error err;
+  mgs_scene_renderer *r = NULL;
+  CHECK_OK(mgs_scene_renderer_create(m, &r, &err), &err);
+  if (!r) { mgs_mesh_destroy(m); return; }
+  mgs_scene_options o;
+  mgs_scene_options_default(&o);
+  CHECK(o.texture_scale == 1.0);
+  o.width = o.height = 96;
+  mgs_camera cam;
+  mgs_scene_make_cameras(&o, 1, 1, mgs_scene_camera_radius(&o, bound_radius(m)), &cam);
+  mgs_image *a = mgs_image_create(96, 96, 4), *b = mgs_image_create(96, 96, 4), *c = mgs_image_create(96, 96, 4);
+  mgs_scene_render_view(r, &cam, &o, 0, a);
+  mgs_scene_render_view(r, &cam, &o, 0, c);
+  o.texture_scale = 4.0;
+  mgs_scene_render_view(r, &cam, &o, 0, b);
+  size_t na, nb, alpha_diff = 0;
+  for (int i = 0; i < 96 * 96; i++) alpha_diff += a->data[4 * i + 3] != b->data[4 * i + 3];
+  CHECK(alpha_diff == 0);
+  CHECK(!memcmp(a->data, c->data, (size_t)96 * 96 * 4 * sizeof(float))); /* deterministic */
+  double da = detail(a, &na), db = detail(b, &nb);
+  CHECK_MSG(na > 1000 && na == nb, "%zu / %zu pixel pairs inside", na, nb);
+  CHECK_MSG(db > 1.8 * da, "neighbour difference %g at scale 4 vs %g at scale 1", db, da);
+  mgs_image_destroy(a);
+  mgs_image_destroy(b);
+  mgs_image_destroy(c);
+  mgs_scene_renderer_destroy(r);
+  mgs_mesh_destroy(m);
+}
+
 static void test_cameras(void) {
   mgs_scene_options o;
   mgs_scene_options_default(&o);
@@ -180,5 +227,6 @@ int main(void) {
   RUN(test_genus2_hemisphere);
   RUN(test_thin);
   RUN(test_specular_and_texture);
+  RUN(test_texture_scale);
   return mgs_test_finish();
 }

@@ -228,7 +228,31 @@ static void floater(void) {
   CHECK(pers[1] > pers[0] && pers[2] > pers[1]);
 }
 
+/* Far outliers (a real SfM cloud's two-view points, 10x the object's size away) do not
+   set the analysis' voxel size and are left out of it. */
+static void far_outliers(void) {
+  const double c[3] = {0, 0, 0};
+  mgs_gaussians *g = mgs_gaussians_create(1024, 0);
+  flat_sphere(g, c, 1.0, 0.05, 0);
+  mgs_morse_ctx *a = analyse(g, MGS_MORSE_SPAWN_NONE);
+  double h0 = mgs_morse_ctx_result(a)->voxel_size;
+  size_t used0 = mgs_morse_ctx_result(a)->gaussians_used;
+  mgs_morse_ctx_unref(a);
+  for (int k = 0; k < 5; k++) {
+    const double p[3] = {k % 2 ? 12.0 + 4 * k : -10.0, 3.0 * k, k % 3 ? 25.0 : -15.0}, n[3] = {0, 0, 1};
+    flat_add(g, p, n, 0.05, 0.01, 0.9, 0.5f);
+  }
+  mgs_morse_ctx *b = analyse(g, MGS_MORSE_SPAWN_NONE);
+  const mgs_morse_result *r = mgs_morse_ctx_result(b);
+  fprintf(stderr, "  voxel %.4f without, %.4f with 5 far Gaussians; %zu / %zu analysed\n", h0, r->voxel_size, used0, r->gaussians_used);
+  CHECK(r->voxel_size < 1.25 * h0 && r->voxel_size > 0.8 * h0); /* was 10x */
+  CHECK(r->gaussians_used == used0);
+  mgs_morse_ctx_unref(b);
+  mgs_gaussians_destroy(g);
+}
+
 int main(void) {
+  RUN(far_outliers);
   RUN(holed_shell);
   RUN(plate_hole);
   RUN(thin_tube);

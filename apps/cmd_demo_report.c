@@ -203,7 +203,9 @@ static void row(sbuf *b, const char *label, const char *cells[], int n) {
 
 static void what_ran(char *buf, size_t n, const run_figs *f) {
   const char *topo = mgs_settings_get(&f->cfg, "topo_loss");
-  if (!strcmp(cfg(f, "strategy"), "morse") || topo)
+  if (!mgs_settings_get(&f->cfg, "strategy"))
+    snprintf(buf, n, "n/a (no cfg_args)");
+  else if (!strcmp(cfg(f, "strategy"), "morse") || topo)
     snprintf(buf, n, "strategy %s (spawn %s, prune %s), init %s, L_topo %s (β %s), normal loss %s, analysis r = %s",
              cfg(f, "strategy"), cfg(f, "morse_spawn"), cfg(f, "morse_prune"), cfg(f, "init"), cfg(f, "topo_loss"),
              cfg(f, "topo_beta"), cfg(f, "normal_loss"), cfg(f, "morse_resolution"));
@@ -252,8 +254,10 @@ int demo_report(const demo_ctx *ctx) {
   ROW("training wall time", fmt(c, W, "%.1f s", f->train_s));
   char tmp[96];
   ROW("Morse analyses (α-field, SDF, persistence, ...)",
-      isfinite(f->analyses) ? snprintf(c, W, "%.0f, at iterations %d..%d: %s", f->analyses, f->first_it, f->last_it,
-                                       share(tmp, sizeof tmp, f->analysis_s, f->train_s)) : snprintf(c, W, "–"));
+      !isfinite(f->analyses) ? snprintf(c, W, "–")
+      : f->csv_rows > 0 ? snprintf(c, W, "%.0f, at iterations %d..%d: %s", f->analyses, f->first_it, f->last_it,
+                                   share(tmp, sizeof tmp, f->analysis_s, f->train_s))
+                        : snprintf(c, W, "%.0f: %s", f->analyses, share(tmp, sizeof tmp, f->analysis_s, f->train_s)));
   ROW("loss terms between analyses (L_topo, normal loss)", share(c, W, isfinite(f->analyses) ? f->term_s : NAN, f->train_s));
   ROW("MorseGS overhead in all", share(c, W, isfinite(f->analyses) ? f->analysis_s + f->term_s : NAN, f->train_s));
   ROW("Morse spawned / pruned Gaussians (sum over analyses)",
@@ -267,9 +271,13 @@ int demo_report(const demo_ctx *ctx) {
     sb_printf(&b, "\nThe morse-full run used `--morse-warmup %s --morse-every %s` (from `run-morse/cfg_args`): the "
                   "preset's defaults (W = 3000, K = 500) belong to a 30000-iteration schedule and would never fire in "
                   "%d iterations, so the demo starts the analysis at a quarter of the run (where ADC starts densifying "
-                  "in the default 2000-iteration demo) and repeats it every eighth; it ran %d times (rows of "
-                  "`run-morse/morse_analysis.csv`, %.1f s in all by its `s_total` column).\n",
-              cfg(m, "morse_warmup"), cfg(m, "morse_every"), ctx->iters, m->csv_rows, m->csv_seconds);
+                  "in the default 2000-iteration demo) and repeats it every eighth",
+              cfg(m, "morse_warmup"), cfg(m, "morse_every"), ctx->iters);
+    if (m->csv_rows >= 0)
+      sb_printf(&b, "; it ran %d times (rows of `run-morse/morse_analysis.csv`, %.1f s in all by its `s_total` column).\n",
+                m->csv_rows, m->csv_seconds);
+    else
+      sb_printf(&b, "; the run wrote no `run-morse/morse_analysis.csv`.\n");
     sb_printf(&b, "\nOne seed, %d iterations, one small scene: this shows that both pipelines run and what each "
                   "produced here, not whether MorseGS helps. The experiment that asks that question (several scenes, "
                   "variants and seeds, with H1–H4 verdicts) is `morsegs experiment`.\n", ctx->iters);

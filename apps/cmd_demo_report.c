@@ -22,7 +22,7 @@ typedef struct run_figs {
   double active_voxels, voxel;
   /* RUN/morse_analysis.csv */
   int csv_rows, first_it, last_it, betti_eps_last[3];
-  double spawned, pruned, csv_seconds;
+  double spawned, pruned, csv_seconds, stage_s[5]; /* stage_s: s_alpha .. s_components summed */
   mgs_settings cfg; /* RUN/cfg_args */
 } run_figs;
 
@@ -92,6 +92,7 @@ static void read_csv(const char *run_dir, run_figs *f) {
   f->csv_rows = 0;
   f->first_it = f->last_it = -1;
   f->spawned = f->pruned = f->csv_seconds = 0;
+  for (int k = 0; k < 5; k++) f->stage_s[k] = 0;
   for (int k = 0; k < 3; k++) f->betti_eps_last[k] = -1;
   char *p = mgs_path_join(run_dir, "morse_analysis.csv"), *text = NULL;
   if (!p || mgs_read_file(p, &text, NULL, NULL) != MGS_OK) { free(p); f->csv_rows = -1; return; }
@@ -99,6 +100,9 @@ static void read_csv(const char *run_dir, run_figs *f) {
   char *save = NULL, *line = strtok_r(text, "\n", &save);
   const char *header = line;
   int c_it = csv_col(header, "iteration"), c_sp = csv_col(header, "spawned"), c_pr = csv_col(header, "pruned");
+  static const char *stage_cols[5] = {"s_alpha", "s_sdf", "s_persistence", "s_closest", "s_components"};
+  int c_st[5];
+  for (int k = 0; k < 5; k++) c_st[k] = csv_col(header, stage_cols[k]);
   int c_s = csv_col(header, "s_total"), c_b[3] = {csv_col(header, "betti_eps_0"), csv_col(header, "betti_eps_1"),
                                                   csv_col(header, "betti_eps_2")};
   while ((line = strtok_r(NULL, "\n", &save)) != NULL) {
@@ -110,6 +114,7 @@ static void read_csv(const char *run_dir, run_figs *f) {
     f->spawned += csv_field(line, c_sp);
     f->pruned += csv_field(line, c_pr);
     f->csv_seconds += csv_field(line, c_s);
+    for (int k = 0; k < 5; k++) f->stage_s[k] += csv_field(line, c_st[k]);
     for (int k = 0; k < 3; k++) {
       double b = csv_field(line, c_b[k]);
       f->betti_eps_last[k] = isfinite(b) ? (int)b : -1;
@@ -268,6 +273,9 @@ int demo_report(const demo_ctx *ctx) {
       : f->csv_rows > 0 ? snprintf(c, W, "%.0f, at iterations %d..%d: %s", f->analyses, f->first_it, f->last_it,
                                    share(tmp, sizeof tmp, f->analysis_s, f->train_s))
                         : snprintf(c, W, "%.0f: %s", f->analyses, share(tmp, sizeof tmp, f->analysis_s, f->train_s)));
+  ROW("analysis seconds by stage, summed (α-field / SDF / persistence / closest points / components)",
+      f->csv_rows > 0 ? snprintf(c, W, "%.2f / %.2f / %.2f / %.2f / %.2f", f->stage_s[0], f->stage_s[1], f->stage_s[2],
+                                 f->stage_s[3], f->stage_s[4]) : snprintf(c, W, "–"));
   ROW("loss terms between analyses (L_topo, normal loss)", share(c, W, isfinite(f->analyses) ? terms_only(f) : NAN, f->train_s));
   ROW("MorseGS overhead in all", share(c, W, isfinite(f->analyses) ? f->analysis_s + terms_only(f) : NAN, f->train_s));
   ROW("Morse spawned / pruned Gaussians (sum over analyses)",

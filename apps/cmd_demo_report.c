@@ -298,7 +298,8 @@ int demo_report(const demo_ctx *ctx) {
       sb_printf(&b, "; the run wrote no `run-morse/morse_analysis.csv`.\n");
     sb_printf(&b, "\nOne seed, %d iterations, one small scene: this shows that both pipelines run and what each "
                   "produced here, not whether MorseGS helps. The experiment that asks that question (several scenes, "
-                  "variants and seeds, with H1–H4 verdicts) is `morsegs experiment`.\n", ctx->iters);
+                  "variants and seeds, with H1–H4 verdicts) is `morsegs experiment`; it also measures floaters by "
+                  "their visible opacity mass, where `morsegs eval` (above) counts them.\n", ctx->iters);
   }
   sb_printf(&b, "\nStage wall times of this demo:");
   for (int i = 0; i < ctx->n_stages_done; i++) sb_printf(&b, "%s %s %.1f s", i ? "," : "", ctx->stage_name[i], ctx->stage_seconds[i]);

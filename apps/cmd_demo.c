@@ -161,7 +161,7 @@ static void demo_usage(FILE *f) {
   fprintf(f, "options:\n  -o, --output DIR  output folder (demo-out)\n  --force           rebuild outputs that exist\n"
              "  --iters N         training iterations of both runs (2000); the morse-full run's analysis\n"
              "                    starts at N/4 and repeats every N/8 iterations (--morse-warmup/--morse-every)\n"
-             "  --baseline-only   skip the morse-full run (the *-morse stages): about a third of the time\n"
+             "  --baseline-only   skip the morse-full run (the *-morse stages): under half the time\n"
              "  -q, --quiet       no progress output\n  -h, --help        this text\n");
 }
 

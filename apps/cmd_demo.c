@@ -1,8 +1,10 @@
 /* `morsegs demo`: the embedded default, run end to end. A list of stages over one
  * context; each prints what it wrote: the built-in genus-2 scene as a small dataset, a
- * brief 3DGS training run on it, evaluation (PSNR/SSIM, Chamfer/F-score/floaters against
- * the ground-truth mesh), the .vdb export (density + sdf + surface mesh), persistence of
- * the SDF (diagram, barcode, critical points) and a short report, DIR/REPORT.md.
+ * brief 3DGS baseline training run on it, evaluation (PSNR/SSIM, Chamfer/F-score/floaters
+ * against the ground-truth mesh), the .vdb export (density + sdf + surface mesh),
+ * persistence of the SDF (diagram, barcode, critical points); then the same four stages
+ * for `--preset morse-full` at the same seed and iterations (DIR/run-morse), and a report
+ * that puts the two side by side, DIR/REPORT.md (apps/cmd_demo_report.c).
  * The later stages run the subcommands in-process with the arguments a user would type,
  * so the demo exercises exactly what the CLI does. */
 #include <getopt.h>
@@ -10,24 +12,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <cjson/cJSON.h>
+#include "apps/cmd_demo.h"
 #include "apps/mgs_cli.h"
 #include "assets/mgs_assets.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 #include "render/mgs_scene.h"
-
-typedef struct demo_ctx {
-  const char *out_dir;   /* -o (demo-out) */
-  int force;             /* rebuild what exists */
-  int quiet;
-  int iters;             /* training iterations */
-  char *scene_dir;       /* DIR/scene: the dataset the later stages train on */
-  char *run_dir;         /* DIR/run: the training run */
-  char *ply_path;        /* the trained model */
-  char *vdb_path;        /* DIR/run/scene.vdb */
-  char *pers_dir;        /* DIR/run/persistence */
-} demo_ctx;
 
 /* Runs a subcommand in-process, as `morsegs ARGS...` would. */
 static int run_cmd(int (*fn)(int, char **), const char *const *args) {
@@ -46,10 +36,12 @@ static int run_cmd(int (*fn)(int, char **), const char *const *args) {
 typedef struct demo_stage {
   const char *name;
   const char *what;
-  int (*run)(demo_ctx *ctx); /* 0 ok, else the exit code */
+  int (*run)(demo_ctx *ctx, demo_run *r); /* 0 ok, else the exit code */
+  int run_index;                          /* which run the stage works on (-1: none) */
 } demo_stage;
 
-static int stage_scene(demo_ctx *ctx) {
+static int stage_scene(demo_ctx *ctx, demo_run *r) {
+  (void)r;
   ctx->scene_dir = mgs_path_join(ctx->out_dir, "scene");
   if (!ctx->scene_dir) return 1;
   char *record = mgs_path_join(ctx->scene_dir, "scene.json");
@@ -87,146 +79,104 @@ static int stage_scene(demo_ctx *ctx) {
   return 0;
 }
 
-static int stage_train(demo_ctx *ctx) {
-  ctx->run_dir = mgs_path_join(ctx->out_dir, "run");
+/* Trains run r: the baseline exactly as before (DIR/run), morse-full with the same
+ * seed (the trainer's default, for both) and iterations plus its preset and the scaled
+ * analysis schedule. */
+static int stage_train(demo_ctx *ctx, demo_run *r) {
   char sub[96];
   snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", ctx->iters);
-  ctx->ply_path = mgs_path_join(ctx->run_dir, sub);
-  if (!ctx->run_dir || !ctx->ply_path) return 1;
-  if (mgs_path_exists(ctx->ply_path) && !ctx->force) {
-    printf("  %s: kept the existing trained model (pass --force to retrain)\n", ctx->ply_path);
+  r->run_dir = mgs_path_join(ctx->out_dir, r->subdir);
+  r->ply_path = r->run_dir ? mgs_path_join(r->run_dir, sub) : NULL;
+  if (!r->run_dir || !r->ply_path) return 1;
+  if (mgs_path_exists(r->ply_path) && !ctx->force) {
+    printf("  %s: kept the existing trained model (pass --force to retrain)\n", r->ply_path);
     return 0;
   }
-  char iters[32];
+  char iters[32], warmup[32], every[32];
   snprintf(iters, sizeof iters, "%d", ctx->iters);
-  const char *args[] = {"train", ctx->scene_dir, "-o", ctx->run_dir, "--iters", iters, "--force",
-                        ctx->quiet ? "--quiet" : NULL, NULL};
+  snprintf(warmup, sizeof warmup, "%d", ctx->morse_warmup);
+  snprintf(every, sizeof every, "%d", ctx->morse_every);
+  const char *args[20];
+  int n = 0;
+  args[n++] = "train"; args[n++] = ctx->scene_dir; args[n++] = "-o"; args[n++] = r->run_dir;
+  args[n++] = "--iters"; args[n++] = iters; args[n++] = "--force";
+  if (r->preset) {
+    args[n++] = "--preset"; args[n++] = r->preset;
+    args[n++] = "--morse-warmup"; args[n++] = warmup;
+    args[n++] = "--morse-every"; args[n++] = every;
+  }
+  if (ctx->quiet) args[n++] = "--quiet";
+  args[n] = NULL;
   return run_cmd(mgs_cmd_train, args);
 }
 
-static int stage_eval(demo_ctx *ctx) {
-  const char *args[] = {"eval", ctx->run_dir, NULL};
+static int stage_eval(demo_ctx *ctx, demo_run *r) {
+  (void)ctx;
+  const char *args[] = {"eval", r->run_dir, NULL};
   return run_cmd(mgs_cmd_eval, args);
 }
 
-static int stage_vdb(demo_ctx *ctx) {
-  ctx->vdb_path = mgs_path_join(ctx->run_dir, "scene.vdb");
-  char *mesh = mgs_path_join(ctx->run_dir, "surface.ply");
-  if (!ctx->vdb_path || !mesh) { free(mesh); return 1; }
-  const char *args[] = {"vdb", ctx->ply_path, "-o", ctx->vdb_path, "--mesh", mesh, "--force", NULL};
+static int stage_vdb(demo_ctx *ctx, demo_run *r) {
+  (void)ctx;
+  r->vdb_path = mgs_path_join(r->run_dir, "scene.vdb");
+  char *mesh = mgs_path_join(r->run_dir, "surface.ply");
+  if (!r->vdb_path || !mesh) { free(mesh); return 1; }
+  const char *args[] = {"vdb", r->ply_path, "-o", r->vdb_path, "--mesh", mesh, "--force", NULL};
   int rc = run_cmd(mgs_cmd_vdb, args);
   free(mesh);
   return rc;
 }
 
-static int stage_persistence(demo_ctx *ctx) {
-  ctx->pers_dir = mgs_path_join(ctx->run_dir, "persistence");
-  if (!ctx->pers_dir) return 1;
-  const char *args[] = {"persistence", ctx->vdb_path, "--grid", "sdf", "-o", ctx->pers_dir, "--force", NULL};
+static int stage_persistence(demo_ctx *ctx, demo_run *r) {
+  (void)ctx;
+  r->pers_dir = mgs_path_join(r->run_dir, "persistence");
+  if (!r->pers_dir) return 1;
+  const char *args[] = {"persistence", r->vdb_path, "--grid", "sdf", "-o", r->pers_dir, "--force", NULL};
   return run_cmd(mgs_cmd_persistence, args);
 }
 
-static cJSON *read_json(const char *dir, const char *name) {
-  char *p = mgs_path_join(dir, name), *text = NULL;
-  cJSON *j = NULL;
-  if (p && mgs_read_file(p, &text, NULL, NULL) == MGS_OK) j = cJSON_Parse(text);
-  free(text);
-  free(p);
-  return j;
-}
-
-static double num(const cJSON *o, const char *key) {
-  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
-  return cJSON_IsNumber(v) ? v->valuedouble : NAN;
-}
-
-/* DIR/REPORT.md: the figures a user looks at first, gathered from the stages' JSON. */
-static int stage_report(demo_ctx *ctx) {
-  cJSON *res = read_json(ctx->run_dir, "results.json");
-  cJSON *pers = read_json(ctx->pers_dir, "diagram.json");
-  const cJSON *ours = NULL, *geo = NULL;
-  cJSON *it;
-  cJSON_ArrayForEach(it, res) ours = it; /* the last "ours_N" entry */
-  if (ours) geo = cJSON_GetObjectItemCaseSensitive(ours, "geometry");
-  const cJSON *meta = pers ? cJSON_GetObjectItemCaseSensitive(pers, "meta") : NULL;
-  if (!meta) meta = pers;
-  const cJSON *betti = meta ? cJSON_GetObjectItemCaseSensitive(meta, "betti") : NULL;
-  int b[3] = {-1, -1, -1};
-  for (int k = 0; k < 3 && cJSON_IsArray(betti); k++) {
-    const cJSON *e = cJSON_GetArrayItem(betti, k);
-    if (cJSON_IsNumber(e)) b[k] = e->valueint;
-  }
-  /* Raw Betti numbers count every voxel-scale tunnel of a noisy field; the counts of
-   * features that persist over more than 2 voxels are the ones to compare with the
-   * shape's own (1, 2, 0). */
-  int bp[3] = {0, 0, 0};
-  const cJSON *pairs = pers ? cJSON_GetObjectItemCaseSensitive(pers, "pairs") : NULL;
-  double h = num(meta, "voxel_size"), level = num(meta, "level");
-  if (!isfinite(level)) level = 0;
-  cJSON_ArrayForEach(it, pairs) {
-    double dim = num(it, "dim"), birth = num(it, "birth"), death = num(it, "death");
-    if (!isfinite(death)) death = INFINITY; /* essential classes are written as "inf" */
-    if (dim >= 0 && dim <= 2 && birth <= level && death > level && death - birth > 2 * h) bp[(int)dim]++;
-  }
-  char buf[4096];
-  int n = snprintf(buf, sizeof buf,
-    "# MorseGS demo report\n\n"
-    "Scene: built-in `genus2` (a closed double torus: Betti numbers of the solid 1, 2, 0), "
-    "40 train / 8 test views at 128x128, rendered with Embree.\n\n"
-    "| stage | figure | value |\n|---|---|---|\n"
-    "| train (3DGS baseline, ADC) | iterations | %d |\n"
-    "| | Gaussians | %.0f |\n"
-    "| | training time | %.1f s |\n"
-    "| eval (test views) | PSNR | %.2f dB |\n"
-    "| | SSIM | %.4f |\n"
-    "| geometry vs GT mesh | Chamfer (mean of both directions) | %.4f |\n"
-    "| | F-score | %.3f |\n"
-    "| | floaters (opacity < 0.01, > 3 sigma from GT) | %.0f |\n"
-    "| persistence of the SDF (`sdf` grid) | Betti numbers at t = 0 | %d, %d, %d (a filled double torus has 1, 2, 0; a closed shell around its surface 1, 4, 1) |\n"
-    "| | Betti numbers of features persisting over 2 voxels | %d, %d, %d |\n"
-    "| | active voxels | %.0f |\n"
-    "| | critical cells of the discrete gradient / cells in the band | %.0f / %.0f (%.1f %% paired away) |\n\n"
-    "Files: `run/point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), `run/eval/` (render | GT | error), "
-    "`run/scene.vdb` (grids `density`, `sdf`), `run/surface.ply`, `run/persistence/` "
-    "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb).\n",
-    ctx->iters, num(ours, "gaussians"), num(ours, "train_seconds"), num(ours, "PSNR"), num(ours, "SSIM"),
-    num(geo, "chamfer"), num(geo, "fscore"), num(geo, "floaters"), b[0], b[1], b[2],
-    bp[0], bp[1], bp[2], num(meta, "active_voxels"), num(meta, "critical_cells"), num(meta, "band_cells"),
-    100.0 * num(meta, "reduction_ratio"), ctx->iters);
-  cJSON_Delete(res);
-  cJSON_Delete(pers);
-  char *path = mgs_path_join(ctx->out_dir, "REPORT.md");
-  mgs_error err;
-  mgs_error_clear(&err);
-  mgs_status st = path ? mgs_write_file_atomic(path, buf, (size_t)n < sizeof buf ? (size_t)n : sizeof buf - 1, &err)
-                       : mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory");
-  if (st == MGS_OK) printf("%s", buf), printf("  wrote %s\n", path);
-  free(path);
-  return st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
+static int stage_report(demo_ctx *ctx, demo_run *r) {
+  (void)r;
+  return demo_report(ctx);
 }
 
 static const demo_stage stages[] = {
-    {"scene", "built-in genus-2 scene -> NeRF-synthetic dataset", stage_scene},
-    {"train", "3DGS baseline training (brief)", stage_train},
-    {"eval", "PSNR/SSIM on test views, Chamfer/F-score/floaters vs the GT mesh", stage_eval},
-    {"vdb", "trained .ply -> .vdb (density fog + sdf level set) and surface mesh", stage_vdb},
-    {"persist", "persistence diagram of the SDF, plots, critical points", stage_persistence},
-    {"report", "DIR/REPORT.md", stage_report},
+    {"scene", "built-in genus-2 scene -> NeRF-synthetic dataset", stage_scene, -1},
+    {"train", "3DGS baseline training (brief)", stage_train, DEMO_BASE},
+    {"eval", "PSNR/SSIM on test views, Chamfer/F-score/floaters vs the GT mesh", stage_eval, DEMO_BASE},
+    {"vdb", "trained .ply -> .vdb (density fog + sdf level set) and surface mesh", stage_vdb, DEMO_BASE},
+    {"persist", "persistence diagram of the SDF, plots, critical points", stage_persistence, DEMO_BASE},
+    {"train-morse", "MorseGS training, --preset morse-full, same seed and iterations", stage_train, DEMO_MORSE},
+    {"eval-morse", "the same evaluation of the morse-full model", stage_eval, DEMO_MORSE},
+    {"vdb-morse", "the same .vdb export of the morse-full model", stage_vdb, DEMO_MORSE},
+    {"persist-morse", "the same persistence of its SDF", stage_persistence, DEMO_MORSE},
+    {"report", "DIR/REPORT.md: baseline and morse-full side by side", stage_report, -1},
 };
+enum { N_STAGES = sizeof stages / sizeof stages[0] };
 
 static void demo_usage(FILE *f) {
-  fprintf(f, "usage: morsegs demo [-o DIR] [--iters N] [--force] [-q]\n"
+  fprintf(f, "usage: morsegs demo [-o DIR] [--iters N] [--baseline-only] [--force] [-q]\n"
              "Runs the bundled demo end to end into DIR (demo-out):\n");
-  for (size_t i = 0; i < sizeof stages / sizeof stages[0]; i++) fprintf(f, "  %zu. %-8s %s\n", i + 1, stages[i].name, stages[i].what);
+  for (size_t i = 0; i < N_STAGES; i++) fprintf(f, "  %2zu. %-13s %s\n", i + 1, stages[i].name, stages[i].what);
   fprintf(f, "options:\n  -o, --output DIR  output folder (demo-out)\n  --force           rebuild outputs that exist\n"
-             "  --iters N         training iterations (2000)\n  -q, --quiet       no progress output\n  -h, --help        this text\n");
+             "  --iters N         training iterations of both runs (2000); the morse-full run's analysis\n"
+             "                    starts at N/4 and repeats every N/8 iterations (--morse-warmup/--morse-every)\n"
+             "  --baseline-only   skip the morse-full run (the *-morse stages): under half the time\n"
+             "  -q, --quiet       no progress output\n  -h, --help        this text\n");
 }
 
 int mgs_cmd_demo(int argc, char **argv) {
+  enum { O_BASE_ONLY = 1000 };
   static const struct option longopts[] = {{"output", required_argument, 0, 'o'}, {"force", no_argument, 0, 'f'},
                                            {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
-                                           {"iters", required_argument, 0, 'i'}, {0, 0, 0, 0}};
-  demo_ctx ctx = {"demo-out", 0, 0, 2000, NULL, NULL, NULL, NULL, NULL};
+                                           {"iters", required_argument, 0, 'i'},
+                                           {"baseline-only", no_argument, 0, O_BASE_ONLY}, {0, 0, 0, 0}};
+  demo_ctx ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.out_dir = "demo-out";
+  ctx.iters = 2000;
+  ctx.runs[DEMO_BASE] = (demo_run){"baseline", "run", NULL, NULL, NULL, NULL, NULL};
+  ctx.runs[DEMO_MORSE] = (demo_run){"morse-full", "run-morse", "morse-full", NULL, NULL, NULL, NULL};
   optind = 1;
   opterr = 0;
   int c;
@@ -235,6 +185,7 @@ int mgs_cmd_demo(int argc, char **argv) {
     case 'o': ctx.out_dir = optarg; break;
     case 'f': ctx.force = 1; break;
     case 'q': ctx.quiet = 1; break;
+    case O_BASE_ONLY: ctx.baseline_only = 1; break;
     case 'i': {
       char *end;
       long v = strtol(optarg, &end, 10);
@@ -247,22 +198,37 @@ int mgs_cmd_demo(int argc, char **argv) {
     }
   }
   if (optind < argc) { fprintf(stderr, "morsegs demo: unexpected argument '%s'\n", argv[optind]); return 2; }
+  ctx.n_runs = ctx.baseline_only ? 1 : 2;
+  /* The preset's W = 3000, K = 500 belong to a 30000-iteration schedule and never fire in
+   * a 2000-iteration demo. Scaled: the analysis starts where ADC starts densifying in the
+   * default demo (500 of 2000, a quarter of the run) and repeats every eighth, so a
+   * default demo gets six analyses (500, 750, ..., 1750) while ADC is still active. */
+  ctx.morse_warmup = ctx.iters / 4 > 0 ? ctx.iters / 4 : 1;
+  ctx.morse_every = ctx.iters / 8 > 0 ? ctx.iters / 8 : 1;
   mgs_error err;
   mgs_error_clear(&err);
   if (mgs_mkdir_p(ctx.out_dir, &err) != MGS_OK) return mgs_cli_fail("demo", &err);
   double t0 = mgs_now();
-  int rc = 0;
-  size_t n = sizeof stages / sizeof stages[0];
-  for (size_t i = 0; i < n && rc == 0; i++) {
-    printf("[%zu/%zu] %s: %s\n", i + 1, n, stages[i].name, stages[i].what);
+  int rc = 0, n = 0;
+  for (size_t i = 0; i < N_STAGES; i++) n += !(ctx.baseline_only && stages[i].run_index == DEMO_MORSE);
+  for (size_t i = 0, k = 0; i < N_STAGES && rc == 0; i++) {
+    if (ctx.baseline_only && stages[i].run_index == DEMO_MORSE) continue;
+    printf("[%zu/%d] %s: %s\n", ++k, n, stages[i].name, stages[i].what);
     fflush(stdout);
-    rc = stages[i].run(&ctx);
+    double ts = mgs_now();
+    rc = stages[i].run(&ctx, stages[i].run_index >= 0 ? &ctx.runs[stages[i].run_index] : NULL);
+    if (ctx.n_stages_done < 16) {
+      ctx.stage_name[ctx.n_stages_done] = stages[i].name;
+      ctx.stage_seconds[ctx.n_stages_done++] = mgs_now() - ts;
+    }
   }
   if (rc == 0) printf("demo done in %.1f s; outputs in %s/\n", mgs_now() - t0, ctx.out_dir);
   free(ctx.scene_dir);
-  free(ctx.run_dir);
-  free(ctx.ply_path);
-  free(ctx.vdb_path);
-  free(ctx.pers_dir);
+  for (int r = 0; r < DEMO_RUNS; r++) {
+    free(ctx.runs[r].run_dir);
+    free(ctx.runs[r].ply_path);
+    free(ctx.runs[r].vdb_path);
+    free(ctx.runs[r].pers_dir);
+  }
   return rc;
 }

@@ -1,6 +1,8 @@
-/* `morsegs demo`: builds the genus-2 dataset, trains, evaluates, exports and analyses it;
- * the dataset loads, the report holds figures a working pipeline reaches, and a second
- * run keeps what exists (no overwrite without --force). */
+/* `morsegs demo`: builds the genus-2 dataset, trains the baseline and morse-full, evaluates,
+ * exports and analyses both; the dataset loads, the report puts the two runs side by side
+ * with figures a working pipeline reaches and that agree with the files the runs wrote
+ * (morse-full's analyses = the rows of its morse_analysis.csv), and a second run with
+ * --baseline-only keeps what exists (no overwrite without --force) and reports one column. */
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -31,24 +33,61 @@ int main(void) {
     CHECK(d->init_points && d->init_points->n > 0);
   }
   mgs_dataset_destroy(d);
-  /* The report: PSNR well above what a broken trainer reaches, and one persistent
-   * connected component in the SDF of the trained model. */
-  char report[1100], line[1024];
+  /* The report: one column per run; PSNR well above what a broken trainer reaches, and
+   * one persistent connected component in the SDF of each trained model. */
+  char report[1100], line[2048];
   snprintf(report, sizeof report, "%s/REPORT.md", root);
   FILE *f = fopen(report, "r");
   CHECK(f != NULL);
-  double psnr = 0;
-  int b0 = -1, b1 = -1, b2 = -1;
+  double psnr[2] = {0, 0}, gauss[2] = {0, 0};
+  int b[2][3] = {{-1, -1, -1}, {-1, -1, -1}}, header = 0, analyses = -1, spawned = -1, pruned = -1, base_dash = 0;
+  const char *k_psnr = "| PSNR (test views) |", *k_g = "| Gaussians |",
+             *k_b = "| Betti numbers of features persisting over 2 voxels (shape: 1, 2, 0) |",
+             *k_an = "| Morse analyses (", *k_sp = "| Morse spawned / pruned Gaussians (sum over analyses) |";
   while (f && fgets(line, sizeof line, f)) {
-    if (strstr(line, "| PSNR |")) sscanf(strstr(line, "| PSNR |") + 8, "%lf", &psnr);
-    const char *k = "| Betti numbers of features persisting over 2 voxels |";
-    if (strstr(line, k)) sscanf(strstr(line, k) + strlen(k), "%d, %d, %d", &b0, &b1, &b2);
+    if (!strncmp(line, "| figure | baseline | morse-full |", 34)) header = 1;
+    if (!strncmp(line, k_psnr, strlen(k_psnr))) sscanf(line + strlen(k_psnr), " %lf dB | %lf dB |", &psnr[0], &psnr[1]);
+    if (!strncmp(line, k_g, strlen(k_g))) sscanf(line + strlen(k_g), " %lf | %lf |", &gauss[0], &gauss[1]);
+    if (!strncmp(line, k_b, strlen(k_b)))
+      sscanf(line + strlen(k_b), " %d, %d, %d | %d, %d, %d |", &b[0][0], &b[0][1], &b[0][2], &b[1][0], &b[1][1], &b[1][2]);
+    if (!strncmp(line, k_an, strlen(k_an))) {
+      const char *cells = strstr(line, ") |"); /* past the label: baseline "–", then morse-full */
+      if (cells) base_dash = !strncmp(cells, ") | – |", strlen(") | – |")), sscanf(cells + strlen(") | – |"), " %d,", &analyses);
+    }
+    if (!strncmp(line, k_sp, strlen(k_sp))) sscanf(line + strlen(k_sp), " – | %d / %d |", &spawned, &pruned);
   }
   if (f) fclose(f);
-  CHECK(psnr > 25);
-  CHECK(b0 >= 1 && b1 >= 0 && b2 >= 0);
+  CHECK(header);
+  CHECK(psnr[0] > 25 && psnr[1] > 25);
+  CHECK(gauss[0] > 1000 && gauss[1] > 1000);
+  CHECK_MSG(gauss[0] != gauss[1], "the two columns hold the same model (%g Gaussians)\n", gauss[0]);
+  CHECK(b[0][0] >= 1 && b[0][1] >= 0 && b[0][2] >= 0);
+  CHECK(b[1][0] >= 1 && b[1][1] >= 0 && b[1][2] >= 0);
+  CHECK(base_dash);
+  CHECK(spawned >= 0 && pruned >= 0);
+  /* The morse-full run: its preset and scaled schedule recorded, one CSV row per analysis,
+   * and the report's count is that number of rows. */
+  char morse[1100], csv[1200], cfg[1200];
+  snprintf(morse, sizeof morse, "%s/run-morse", root);
+  snprintf(cfg, sizeof cfg, "%s/cfg_args", morse);
+  CHECK(file_contains(cfg, "preset='morse-full'") && file_contains(cfg, "morse_warmup=500") &&
+        file_contains(cfg, "morse_every=250") && file_contains(cfg, "iterations=2000"));
+  snprintf(csv, sizeof csv, "%s/morse_analysis.csv", morse);
+  f = fopen(csv, "r");
+  CHECK(f != NULL);
+  int rows = 0, first = 1, it;
+  while (f && fgets(line, sizeof line, f)) {
+    if (first) { CHECK(!strncmp(line, "iteration,", 10) && strstr(line, ",spawned,pruned,")); first = 0; continue; }
+    if (sscanf(line, "%d,", &it) == 1 && it >= 500 && it <= 2000) rows++;
+  }
+  if (f) fclose(f);
+  CHECK_MSG(rows >= 1, "%s: %d analysis rows\n", csv, rows);
+  CHECK_MSG(analyses == rows, "report says %d analyses, the CSV has %d rows\n", analyses, rows);
+  /* --baseline-only: the kept baseline, re-evaluated, in a one-column report */
+  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' -q --baseline-only", cli, root);
   CHECK(run_cmd(cmd, log_path) == 0);
-  CHECK(file_contains(log_path, "kept"));
+  CHECK(file_contains(log_path, "kept") && !file_contains(log_path, "run-morse"));
+  CHECK(file_contains(report, "| figure | baseline |\n") && !file_contains(report, "| morse-full |"));
   snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' --bogus", cli, root);
   CHECK(run_cmd(cmd, log_path) == 2);
   return mgs_test_finish();

@@ -1,0 +1,40 @@
+/* `morsegs demo`, shared between apps/cmd_demo.c (the stages, which run the subcommands
+ * in-process) and apps/cmd_demo_report.c (DIR/REPORT.md and the stdout summary, read back
+ * from the files the stages wrote, so no figure in the report is typed by the demo). */
+#ifndef MGS_CMD_DEMO_H
+#define MGS_CMD_DEMO_H
+
+/* One training run of the demo and the files its later stages write. */
+typedef struct demo_run {
+  const char *label;  /* column heading: "baseline", "morse-full" */
+  const char *subdir; /* DIR/<subdir>: "run" (kept for existing users), "run-morse" */
+  const char *preset; /* --preset of `morsegs train`; NULL = the plain baseline command */
+  char *run_dir;      /* DIR/<subdir> */
+  char *ply_path;     /* the trained model */
+  char *vdb_path;     /* DIR/<subdir>/scene.vdb */
+  char *pers_dir;     /* DIR/<subdir>/persistence */
+} demo_run;
+
+enum { DEMO_BASE = 0, DEMO_MORSE = 1, DEMO_RUNS = 2 };
+
+typedef struct demo_ctx {
+  const char *out_dir; /* -o (demo-out) */
+  int force;           /* rebuild what exists */
+  int quiet;
+  int iters;           /* training iterations, equal for both runs */
+  int baseline_only;   /* --baseline-only: the old fast path, no morse-full run */
+  int morse_warmup;    /* W and K of the morse-full run, scaled to iters (cmd_demo.c) */
+  int morse_every;
+  char *scene_dir;     /* DIR/scene: the dataset both runs train on */
+  demo_run runs[DEMO_RUNS];
+  int n_runs;          /* 1 with --baseline-only, else 2 */
+  /* wall time of each stage so far, for the report */
+  const char *stage_name[16];
+  double stage_seconds[16];
+  int n_stages_done;
+} demo_ctx;
+
+/* Writes DIR/REPORT.md (atomically) and prints it; 0 on success, else the exit code. */
+int demo_report(const demo_ctx *ctx);
+
+#endif

@@ -11,7 +11,6 @@ PKGS=(
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
   netgen-doc
-  colmap  # scripts/colmap_scene.sh only (real SfM on rendered images; not used by the tests)
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -161,7 +161,7 @@ static mgs_status write_stats(const char *run, const mgs_trainer *t, mgs_error *
     cJSON_AddNumberToObject(o, "morse_analysis_seconds", mgs_morse_ctx_seconds(g_morse));
     double ph[MGS_TRAIN_PHASES];
     mgs_trainer_phase_seconds(t, ph);
-    cJSON_AddNumberToObject(o, "loss_term_seconds", ph[5]); /* L_topo between analyses */
+    cJSON_AddNumberToObject(o, "loss_term_seconds", ph[5]); /* every model term (L_topo, normal, PersLoss), including the Morse analyses L_topo triggers */
   }
   cJSON_AddNumberToObject(o, "iterations", mgs_trainer_iteration(t));
   cJSON_AddNumberToObject(o, "train_seconds", mgs_trainer_seconds(t));

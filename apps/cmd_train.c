@@ -455,19 +455,9 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   } else if (!strcmp(init, "sfm") && ds->init_points && ds->init_points->n > 0) {
     st = mgs_init_from_points(ds->init_points->xyz, ds->init_points->rgb, ds->init_points->n, o.sh_degree, &g0, &err);
   } else {
-    /* the reference's random init for NeRF-synthetic: a cube of half-size 1.3; for other
-       formats (scale unknown) a cube of half-size extent/1.1 * 0.5 around the cameras' centre */
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; k++) {
-      double h = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 1.3 : 0.5 * ds->extent / 1.1;
-      double cc = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 0.0 : ds->center[k];
-      lo[k] = cc - h; hi[k] = cc + h;
-    }
-    mgs_rng rng;
-    mgs_rng_init(&rng, seed, 0x696e6974u);
     init_used = "random";
     if (!strcmp(init, "sfm")) mgs_info("%s: no initial points; random init with %d Gaussians", data, random_points);
-    st = mgs_init_random((size_t)random_points, lo, hi, o.sh_degree, &rng, &g0, &err);
+    st = mgs_init_random_for_dataset(ds, (size_t)random_points, o.sh_degree, seed, &g0, &err);
   }
   if (st) goto done;
   mgs_strategy *strat = NULL;

@@ -179,17 +179,9 @@ mgs_status mgs_topogs_init_model(mgs_topogs_flags *f, const mgs_dataset *ds, int
   if (ds->init_points && ds->init_points->n > 0) {
     xyz = ds->init_points->xyz; rgb = ds->init_points->rgb; n = ds->init_points->n;
   } else {
-    /* no SfM points: LPVI over the random init's points (as cmd_train.c's random init) */
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; k++) {
-      double h = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 1.3 : 0.5 * ds->extent / 1.1;
-      double cc = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 0.0 : ds->center[k];
-      lo[k] = cc - h; hi[k] = cc + h;
-    }
-    mgs_rng rng;
-    mgs_rng_init(&rng, seed, 0x696e6974u);
+    /* no SfM points: LPVI over the random init's points (the trainer's random init) */
     mgs_gaussians *r = NULL;
-    mgs_status st = mgs_init_random((size_t)random_points, lo, hi, 0, &rng, &r, err);
+    mgs_status st = mgs_init_random_for_dataset(ds, (size_t)random_points, 0, seed, &r, err);
     if (st) return st;
     n = r->n;
     tx = malloc(3 * n * sizeof *tx);

@@ -182,3 +182,16 @@ mgs_status mgs_init_random(size_t count, const double lo[3], const double hi[3],
   free(xyz); free(rgb);
   return st;
 }
+
+mgs_status mgs_init_random_for_dataset(const mgs_dataset *ds, size_t count, int sh_degree, uint64_t seed,
+                                       mgs_gaussians **out, mgs_error *err) {
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; k++) {
+    double h = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 1.3 : 0.5 * ds->extent / 1.1;
+    double cc = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 0.0 : ds->center[k];
+    lo[k] = cc - h; hi[k] = cc + h;
+  }
+  mgs_rng rng;
+  mgs_rng_init(&rng, seed, 0x696e6974u);
+  return mgs_init_random(count, lo, hi, sh_degree, &rng, out, err);
+}

@@ -103,6 +103,11 @@ mgs_status mgs_knn3_mean_sq(const float *xyz, size_t n, float *out, mgs_error *e
  * [lo, hi]^3, colour SH2RGB(u/255), u uniform in [0,1). */
 mgs_status mgs_init_random(size_t count, const double lo[3], const double hi[3], int sh_degree,
                            mgs_rng *rng, mgs_gaussians **out, mgs_error *err);
+/* The random init for a dataset without initial points: the reference's cube of half-size
+ * 1.3 for NeRF-synthetic; for other formats (scale unknown) a cube of half-size
+ * extent/1.1 * 0.5 around the cameras' centre. `seed` is the run's seed (its own stream). */
+mgs_status mgs_init_random_for_dataset(const mgs_dataset *ds, size_t count, int sh_degree, uint64_t seed,
+                                       mgs_gaussians **out, mgs_error *err);
 
 /* ---- trainer ----------------------------------------------------------------------- */
 

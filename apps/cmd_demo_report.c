@@ -12,6 +12,7 @@
 #include "apps/cmd_demo.h"
 #include "apps/mgs_cli.h"
 #include "core/mgs_fs.h"
+#include "topo/mgs_diagram_tools.h"
 #include "train/mgs_train.h"
 
 /* The figures of one run. NAN / -1 = not written by the stage. */
@@ -164,14 +165,13 @@ static void read_figs(const demo_run *r, run_figs *f) {
   /* Raw Betti numbers count every voxel-scale tunnel of a noisy field; the counts of
    * features that persist over more than 2 voxels are the ones to compare with the
    * shape's own (1, 2, 0). */
-  const cJSON *pairs = pers ? cJSON_GetObjectItemCaseSensitive(pers, "pairs") : NULL;
   double h = num(meta, "voxel_size"), level = num(meta, "level");
   if (!isfinite(level)) level = 0;
-  cJSON_ArrayForEach(it, pairs) {
-    double dim = num(it, "dim"), birth = num(it, "birth"), death = num(it, "death");
-    if (!isfinite(death)) death = INFINITY; /* essential classes are written as "inf" */
-    if (dim >= 0 && dim <= 2 && birth <= level && death > level && death - birth > 2 * h) f->betti_p[(int)dim]++;
-  }
+  char *dpath = pers && r->pers_dir ? mgs_path_join(r->pers_dir, "diagram.json") : NULL;
+  mgs_diagram *d = NULL;
+  if (dpath && mgs_diagram_read_json(dpath, &d, NULL) == MGS_OK) mgs_diagram_betti_persistent(d, level, 2 * h, f->betti_p);
+  mgs_diagram_destroy(d);
+  free(dpath);
   f->active_voxels = num(meta, "active_voxels");
   f->voxel = h;
   cJSON_Delete(pers);

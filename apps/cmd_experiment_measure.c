@@ -25,13 +25,8 @@
 #include "vdb/mgs_vdb_mesh_sdf.h"
 
 void exp_betti_at_zero(const mgs_diagram *d, double thr, int all[3], int persistent[3]) {
-  for (int k = 0; k < 3; k++) all[k] = persistent[k] = 0;
-  for (size_t i = 0; d && i < d->n; i++) {
-    const mgs_pair *p = &d->pairs[i];
-    if (p->dim < 0 || p->dim > 2 || !(p->birth <= 0.0 && 0.0 < p->death)) continue;
-    all[p->dim]++;
-    if (mgs_pair_persistence(p) > thr) persistent[p->dim]++;
-  }
+  mgs_diagram_betti(d, 0.0, all);
+  mgs_diagram_betti_persistent(d, 0.0, thr, persistent);
 }
 
 static mgs_status diagram_of_sdf(const mgs_vdb_grid *sdf, double w, mgs_diagram **out, mgs_error *err) {

@@ -33,13 +33,17 @@ size_t mgs_diagram_top_k(const mgs_diagram *d, int dim, size_t k, size_t *idx) {
   return m;
 }
 
-void mgs_diagram_betti(const mgs_diagram *d, double t, int betti[3]) {
+void mgs_diagram_betti_persistent(const mgs_diagram *d, double t, double min_persistence, int betti[3]) {
   betti[0] = betti[1] = betti[2] = 0;
   if (!d) return;
   for (size_t i = 0; i < d->n; i++) {
     const mgs_pair *p = &d->pairs[i];
-    if (p->dim >= 0 && p->dim <= 2 && p->birth <= t && t < p->death) betti[p->dim]++;
+    if (p->dim >= 0 && p->dim <= 2 && p->birth <= t && t < p->death && p->death - p->birth > min_persistence) betti[p->dim]++;
   }
+}
+
+void mgs_diagram_betti(const mgs_diagram *d, double t, int betti[3]) {
+  mgs_diagram_betti_persistent(d, t, -INFINITY, betti);
 }
 
 void mgs_diagram_betti_superlevel(const mgs_diagram *d, double t, int betti[3]) {

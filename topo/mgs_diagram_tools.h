@@ -72,6 +72,9 @@ size_t mgs_diagram_top_k(const mgs_diagram *d, int dim, size_t k, size_t *idx);
  * dimension 0..2 (for a superlevel diagram stored negated-back, pass the negated level
  * and a negated diagram, or use mgs_diagram_betti_superlevel). */
 void mgs_diagram_betti(const mgs_diagram *d, double t, int betti[3]);
+/* The same, counting only classes whose persistence exceeds min_persistence (the Betti
+ * numbers "above ε": voxel-scale noise left out). */
+void mgs_diagram_betti_persistent(const mgs_diagram *d, double t, double min_persistence, int betti[3]);
 /* Superlevel form: classes with death < t ≤ birth (births above deaths). */
 void mgs_diagram_betti_superlevel(const mgs_diagram *d, double t, int betti[3]);
 

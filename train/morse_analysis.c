@@ -8,6 +8,7 @@
 #include <string.h>
 #include <unistd.h>
 #include "train/morse_internal.h"
+#include "topo/mgs_diagram_tools.h"
 #include "train/mgs_morse_grad.h"
 #include "topo/mgs_persistence.h"
 #include "core/mgs_core.h"
@@ -291,15 +292,9 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
     if (!c->r.pairs) { mgs_diagram_destroy(d); return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory"); }
     c->r.n = d->n;
     double eps = morse_eps_in_use(o, diag);
-    for (size_t k = 0; k < d->n; k++) {
-      const mgs_pair *p = &d->pairs[k];
-      c->r.pairs[k].p = *p;
-      if (p->dim < 0 || p->dim > 2) continue;
-      if (p->birth <= 0 && p->death > 0) {
-        c->r.betti0[p->dim]++;
-        if (p->death - p->birth > eps) c->r.betti_eps[p->dim]++;
-      }
-    }
+    for (size_t k = 0; k < d->n; k++) c->r.pairs[k].p = d->pairs[k];
+    mgs_diagram_betti(d, 0.0, c->r.betti0);
+    mgs_diagram_betti_persistent(d, 0.0, eps, c->r.betti_eps);
     mgs_diagram_destroy(d);
     ts[2] = mgs_now() - t2;
   }

@@ -369,6 +369,7 @@ static mgs_status build_field(const float *xyz, const float *nrm, size_t n, doub
 }
 
 /* ---------------------------------------------------------------- the initialization */
+/* xyz finite (checked by mgs_init_levelset) */
 static mgs_status init_levelset(const float *xyz, const float *rgb, size_t n, int sh_degree, const mgs_levelset_options *oin,
                                 mgs_gaussians **out, mgs_levelset_info *info_out, mgs_error *err) {
   const double t0 = mgs_now();
@@ -381,8 +382,6 @@ static mgs_status init_levelset(const float *xyz, const float *rgb, size_t n, in
   if (!(o.delta > 0) || o.delta > 16) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: delta %g voxels outside (0, 16]", o.delta);
   if (!(o.flatness > 0) || o.flatness > 1) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: flatness %g outside (0, 1]", o.flatness);
   if (!(o.opacity > 0) || !(o.opacity < 1)) return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: opacity %g outside (0, 1)", o.opacity);
-  for (size_t i = 0; i < 3 * n; i++)
-    if (!isfinite(xyz[i])) return mgs_error_set(err, MGS_ERR_NUMERIC, "--init levelset: initial point %zu is not finite", i / 3);
   mgs_levelset_info info;
   memset(&info, 0, sizeof info);
   double lo[3], hi[3];

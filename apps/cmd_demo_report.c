@@ -4,7 +4,6 @@
  * analysis, RUN/persistence/diagram.json of persistence); a file that is missing or lacks
  * a key shows as "n/a", never as a number the demo made up. */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,25 +25,6 @@ typedef struct run_figs {
   double spawned, pruned, csv_seconds, stage_s[5]; /* stage_s: s_alpha .. s_components summed */
   mgs_settings cfg; /* RUN/cfg_args */
 } run_figs;
-
-/* A growing text buffer for the report. */
-typedef struct sbuf { char *s; size_t n, cap; int oom; } sbuf;
-static void sb_printf(sbuf *b, const char *fmt, ...) {
-  if (b->oom) return;
-  for (;;) {
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
-    va_end(ap);
-    if (k < 0) { b->oom = 1; return; }
-    if (b->s && b->n + (size_t)k < b->cap) { b->n += (size_t)k; return; }
-    size_t cap = (b->cap ? b->cap * 2 : 4096) + (size_t)k;
-    char *s = realloc(b->s, cap);
-    if (!s) { b->oom = 1; return; }
-    b->s = s;
-    b->cap = cap;
-  }
-}
 
 static cJSON *read_json(const char *dir, const char *name) {
   char *p = dir ? mgs_path_join(dir, name) : NULL, *text = NULL;
@@ -200,10 +180,10 @@ static const char *share(char *buf, size_t n, double part, double whole) {
 }
 
 /* One table row: label, then one cell per run. */
-static void row(sbuf *b, const char *label, const char *cells[], int n) {
-  sb_printf(b, "| %s |", label);
-  for (int i = 0; i < n; i++) sb_printf(b, " %s |", cells[i]);
-  sb_printf(b, "\n");
+static void row(FILE *b, const char *label, const char *cells[], int n) {
+  fprintf(b, "| %s |", label);
+  for (int i = 0; i < n; i++) fprintf(b, " %s |", cells[i]);
+  fprintf(b, "\n");
 }
 
 /* Seconds in the loss terms without the analyses. train_stats.json's loss_term_seconds is
@@ -236,23 +216,27 @@ int demo_report(const demo_ctx *ctx) {
   char cell[DEMO_RUNS][W];
   const char *cells[DEMO_RUNS];
   for (int i = 0; i < DEMO_RUNS; i++) cells[i] = cell[i];
-  sbuf b = {0};
+  /* the text goes to REPORT.md and to stdout: built in memory once */
+  char *text = NULL;
+  size_t text_len = 0;
+  FILE *b = open_memstream(&text, &text_len);
+  if (!b) { fprintf(stderr, "morsegs demo: out of memory for the report\n"); return 1; }
 
-  sb_printf(&b, "# MorseGS demo report\n\n"
+  fprintf(b, "# MorseGS demo report\n\n"
                 "Scene: built-in `genus2` (a closed double torus: Betti numbers of the solid 1, 2, 0), "
                 "40 train / 8 test views at 128x128, rendered with Embree. ");
   if (n > 1)
-    sb_printf(&b, "Two training runs on it, the same seed and iterations: the 3DGS baseline (`run/`) and "
+    fprintf(b, "Two training runs on it, the same seed and iterations: the 3DGS baseline (`run/`) and "
                   "MorseGS `--preset morse-full` (`run-morse/`), each evaluated, exported and analysed the same way.\n\n");
   else
-    sb_printf(&b, "One training run (`--baseline-only`): the 3DGS baseline (`run/`).\n\n");
+    fprintf(b, "One training run (`--baseline-only`): the 3DGS baseline (`run/`).\n\n");
 
-  sb_printf(&b, "| figure |");
-  for (int i = 0; i < n; i++) sb_printf(&b, " %s |", ctx->runs[i].label);
-  sb_printf(&b, "\n|---|");
-  for (int i = 0; i < n; i++) sb_printf(&b, "---|");
-  sb_printf(&b, "\n");
-#define ROW(label, expr) do { for (int i = 0; i < n; i++) { const run_figs *f = &figs[i]; char *c = cell[i]; (void)f; expr; } row(&b, label, cells, n); } while (0)
+  fprintf(b, "| figure |");
+  for (int i = 0; i < n; i++) fprintf(b, " %s |", ctx->runs[i].label);
+  fprintf(b, "\n|---|");
+  for (int i = 0; i < n; i++) fprintf(b, "---|");
+  fprintf(b, "\n");
+#define ROW(label, expr) do { for (int i = 0; i < n; i++) { const run_figs *f = &figs[i]; char *c = cell[i]; (void)f; expr; } row(b, label, cells, n); } while (0)
   ROW("training", what_ran(c, W, f));
   ROW("iterations / seed", snprintf(c, W, "%s / %s", cfg(f, "iterations"), cfg(f, "seed")));
   ROW("PSNR (test views)", fmt(c, W, "%.2f dB", f->psnr));
@@ -286,24 +270,24 @@ int demo_report(const demo_ctx *ctx) {
 
   if (n > 1) {
     const run_figs *m = &figs[DEMO_MORSE];
-    sb_printf(&b, "\nThe morse-full run used `--morse-warmup %s --morse-every %s` (from `run-morse/cfg_args`): the "
+    fprintf(b, "\nThe morse-full run used `--morse-warmup %s --morse-every %s` (from `run-morse/cfg_args`): the "
                   "preset's defaults (W = 3000, K = 500) belong to a 30000-iteration schedule and would never fire in "
                   "%d iterations, so the demo starts the analysis at a quarter of the run (where ADC starts densifying "
                   "in the default 2000-iteration demo) and repeats it every eighth",
               cfg(m, "morse_warmup"), cfg(m, "morse_every"), ctx->iters);
     if (m->csv_rows >= 0)
-      sb_printf(&b, "; it ran %d times (rows of `run-morse/morse_analysis.csv`, %.1f s in all by its `s_total` column).\n",
+      fprintf(b, "; it ran %d times (rows of `run-morse/morse_analysis.csv`, %.1f s in all by its `s_total` column).\n",
                 m->csv_rows, m->csv_seconds);
     else
-      sb_printf(&b, "; the run wrote no `run-morse/morse_analysis.csv`.\n");
-    sb_printf(&b, "\nOne seed, %d iterations, one small scene: this shows that both pipelines run and what each "
+      fprintf(b, "; the run wrote no `run-morse/morse_analysis.csv`.\n");
+    fprintf(b, "\nOne seed, %d iterations, one small scene: this shows that both pipelines run and what each "
                   "produced here, not whether MorseGS helps. The experiment that asks that question (several scenes, "
                   "variants and seeds, with H1–H4 verdicts) is `morsegs experiment`; it also measures floaters by "
                   "their visible opacity mass, where `morsegs eval` (above) counts them.\n", ctx->iters);
   }
-  sb_printf(&b, "\nStage wall times of this demo:");
-  for (int i = 0; i < ctx->n_stages_done; i++) sb_printf(&b, "%s %s %.1f s", i ? "," : "", ctx->stage_name[i], ctx->stage_seconds[i]);
-  sb_printf(&b, ".\n\nFiles (%s): `point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), "
+  fprintf(b, "\nStage wall times of this demo:");
+  for (int i = 0; i < ctx->n_stages_done; i++) fprintf(b, "%s %s %.1f s", i ? "," : "", ctx->stage_name[i], ctx->stage_seconds[i]);
+  fprintf(b, ".\n\nFiles (%s): `point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), "
                 "`eval/` (render | GT | error), `scene.vdb` (grids `density`, `sdf`), `surface.ply`, `persistence/` "
                 "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s.\n",
             n > 1 ? "per run, in `run/` and `run-morse/`" : "in `run/`", ctx->iters,
@@ -313,9 +297,11 @@ int demo_report(const demo_ctx *ctx) {
   mgs_error err;
   mgs_error_clear(&err);
   char *path = mgs_path_join(ctx->out_dir, "REPORT.md");
-  mgs_status st = path && !b.oom ? mgs_write_file_atomic(path, b.s, b.n, &err) : mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory");
+  int failed = ferror(b);
+  fclose(b); /* text, text_len final */
+  mgs_status st = path && !failed && text ? mgs_write_file_atomic(path, text, text_len, &err) : mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory");
   if (st == MGS_OK) {
-    printf("%s", b.s);
+    printf("%s", text);
     printf("  wrote %s\n", path);
     if (n > 1) /* the one-line comparison a user reads first */
       printf("  baseline vs morse-full: PSNR %.2f vs %.2f dB, %.0f vs %.0f Gaussians, persistent Betti %d,%d,%d vs %d,%d,%d "
@@ -324,6 +310,6 @@ int demo_report(const demo_ctx *ctx) {
              figs[0].betti_p[2], figs[1].betti_p[0], figs[1].betti_p[1], figs[1].betti_p[2], figs[0].train_s, figs[1].train_s);
   }
   free(path);
-  free(b.s);
+  free(text);
   return st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
 }

@@ -182,9 +182,16 @@ while [ $killed -lt "$kills" ]; do
   fi
   [ $fail = 0 ] || break
 done
-# the last resume runs to the end
-train -o "$run" --iters "$iters" --resume > "$work/last.log" 2>&1 || die "final resume failed: $(cat "$work/last.log")"
-resumes=$((resumes + 1))
+# the last run goes to the end: a resume, or a fresh start when the last kill came before
+# the first checkpoint (or the last run had finished and was removed) -- both must give
+# the uninterrupted run's model
+if [ -f "$run/checkpoint.mgsckpt" ]; then
+  train -o "$run" --iters "$iters" --resume > "$work/last.log" 2>&1 || die "final resume failed: $(cat "$work/last.log")"
+  resumes=$((resumes + 1))
+else
+  train -o "$run" --iters "$iters" --force > "$work/last.log" 2>&1 || die "final fresh run failed: $(cat "$work/last.log")"
+  fresh=$((fresh + 1))
+fi
 same=no
 cmp -s "$ref/$final" "$run/$final" && same=yes
 [ $same = yes ] || die "final model differs from the uninterrupted run ($ref/$final vs $run/$final)"

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The README's experiment (issue 10), not in the test command: every variant x 3 seeds on
 # the three built-in scenes and two meshes nobody here made (netgen-doc's hinge.stl,
-# genus 5; gmsh-doc's lever.stl.gz), 7000 iterations, 96x96 views (30 train / 8 test).
-# About 180 runs; hours on 2 cores. Resumable: run the same command again, finished runs
-# are kept (`morsegs experiment` reuses DIR).
+# genus 5; gmsh-doc's lever.stl.gz), by default 7000 iterations, 96x96 views (30 train /
+# 8 test). About 180 runs; ~13 h on 2 cores. Resumable: run the same command again,
+# finished runs are kept (`morsegs experiment` reuses DIR).
+# ITERS, RES (square views), VIEWS, TEST_VIEWS, EVALS override the schedule; the README's
+# table is ITERS=5000 RES=64 VIEWS=24 TEST_VIEWS=6 EVALS=3 (~2 h on 2 cores).
 #   scripts/experiment_full.sh [DIR]     (default exp-full; build/ must hold morsegs)
 # MORSEGS=path picks another binary (e.g. a frozen copy, so that a run spread over days
 # uses one version); MGS_THREADS (1) and NICE (10) as usual.
@@ -17,7 +19,8 @@ lever=/usr/share/doc/gmsh-doc/converters/stl_to_cartesian/lever.stl.gz
 [ -f "$hinge" ] || { echo "experiment_full.sh: $hinge missing: apt-get install netgen-doc" >&2; exit 2; }
 [ -f "$lever" ] || { echo "experiment_full.sh: $lever missing: apt-get install gmsh-doc" >&2; exit 2; }
 mkdir -p "$dir/scenes"
-S="--views 30 --test-views 8 --width 96 --height 96 --spp 2"
+ITERS=${ITERS:-7000}; RES=${RES:-96}; EVALS=${EVALS:-4}
+S="--views ${VIEWS:-30} --test-views ${TEST_VIEWS:-8} --width $RES --height $RES --spp 2"
 for b in sphere genus2 thin; do
   [ -f "$dir/scenes/$b/scene.json" ] || "$M" scene --builtin "$b" -o "$dir/scenes/$b" $S -q
 done
@@ -28,4 +31,4 @@ if [ ! -f "$dir/scenes/lever/scene.json" ]; then
 fi
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment \
   "$dir/scenes/sphere" "$dir/scenes/genus2" "$dir/scenes/thin" "$dir/scenes/hinge" "$dir/scenes/lever" \
-  -o "$dir/full" --iters 7000 --seeds 3 --sweep 0.5,2
+  -o "$dir/full" --iters "$ITERS" --evals "$EVALS" --seeds 3 --sweep 0.5,2

@@ -145,9 +145,10 @@ size_t mgs_morse_ctx_analyses(const mgs_morse_ctx *c);
 mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err);
 mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err);
 
-/* Closest point on {A = τ} from x by Newton steps along ∇A on the α grid (trilinear),
- * then refined on the exact Gaussian sum of g when g is given. Returns 1 when it converged
- * (|A - τ| < 1e-3 τ within 2 voxels... of travel ≤ band), c and |∇A(c)| then set. */
+/* Closest point on {A = τ} from x on the α grid (trilinear): Newton steps along ∇A, or,
+ * where ∇A vanishes (critical cells far from the surface: a blob's core, a gap's middle),
+ * from the nearest grid sample across τ. Returns 1 when a point within max_travel of x
+ * was found (|A - τ| < 1e-4 τ), c and |∇A(c)| then set. */
 int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3],
                             double max_travel, double c[3], double *grad_norm);
 

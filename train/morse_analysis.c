@@ -140,9 +140,10 @@ mgs_status mgs_morse_ctx_update(mgs_morse_ctx *c, const mgs_gaussians *g, int it
 
 /* ---- closest points ------------------------------------------------------------- */
 
-int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3], double max_travel,
-                            double c[3], double *grad_norm) {
-  double h = mgs_vdb_grid_voxel_size(alpha), p[3] = {x[0], x[1], x[2]};
+/* Newton on A - τ from p0; c must end within max_travel of x. */
+static int closest_newton(const mgs_vdb_grid *alpha, double tau, const double x[3], const double p0[3],
+                          double max_travel, double c[3], double *grad_norm) {
+  double h = mgs_vdb_grid_voxel_size(alpha), p[3] = {p0[0], p0[1], p0[2]};
   for (int it = 0; it < 30; it++) {
     float xf[3] = {(float)p[0], (float)p[1], (float)p[2]}, gr[3], v;
     mgs_vdb_sample_gradient(alpha, 1, xf, gr, &v);
@@ -161,6 +162,47 @@ int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const do
     for (int k = 0; k < 3; k++) p[k] += s * gr[k];
   }
   return 0;
+}
+
+/* Critical cells of d far from the surface sit where ∇A vanishes (the middle of a gap
+   between two pieces, the core of a thick part), so Newton from x stalls there. Then the
+   nearest sample on the other side of τ within max_travel (voxel steps) is found, the
+   crossing located by bisection on the segment to it, and Newton finishes from there. */
+static int closest_by_search(const mgs_vdb_grid *alpha, double tau, const double x[3], double max_travel,
+                             double c[3], double *grad_norm) {
+  double h = mgs_vdb_grid_voxel_size(alpha);
+  int r = (int)ceil(max_travel / h);
+  if (r < 1) r = 1;
+  if (r > 16) r = 16;
+  float xf[3] = {(float)x[0], (float)x[1], (float)x[2]}, a0;
+  mgs_vdb_sample(alpha, 1, xf, &a0);
+  int inside = a0 >= tau;
+  double best = INFINITY, q[3] = {0, 0, 0};
+  for (int i = -r; i <= r; i++)
+    for (int j = -r; j <= r; j++)
+      for (int k = -r; k <= r; k++) {
+        double dd = h * sqrt((double)(i * i + j * j + k * k));
+        if (dd >= best || dd > max_travel || (i | j | k) == 0) continue;
+        float y[3] = {(float)(x[0] + i * h), (float)(x[1] + j * h), (float)(x[2] + k * h)}, a;
+        mgs_vdb_sample(alpha, 1, y, &a);
+        if ((a >= tau) != inside) { best = dd; q[0] = y[0]; q[1] = y[1]; q[2] = y[2]; }
+      }
+  if (!isfinite(best)) return 0;
+  double lo[3] = {x[0], x[1], x[2]}, hi[3] = {q[0], q[1], q[2]}, m[3];
+  for (int it = 0; it < 20; it++) {
+    for (int k = 0; k < 3; k++) m[k] = 0.5 * (lo[k] + hi[k]);
+    float mf[3] = {(float)m[0], (float)m[1], (float)m[2]}, a;
+    mgs_vdb_sample(alpha, 1, mf, &a);
+    if ((a >= tau) == inside) memcpy(lo, m, sizeof m);
+    else memcpy(hi, m, sizeof m);
+  }
+  return closest_newton(alpha, tau, x, hi, max_travel, c, grad_norm);
+}
+
+int mgs_morse_grid_closest_point(const mgs_vdb_grid *alpha, double tau, const double x[3], double max_travel,
+                            double c[3], double *grad_norm) {
+  return closest_newton(alpha, tau, x, x, max_travel, c, grad_norm) ||
+         closest_by_search(alpha, tau, x, max_travel, c, grad_norm);
 }
 
 /* ---- camera counts ---------------------------------------------------------------- */

@@ -3,7 +3,8 @@
  * whole chain Gaussian parameters -> A at c -> SDF at the voxel -> loss (pairing fixed:
  * the voxels stay, their closest points are found again on the perturbed surface), on
  * scenes at tiny and huge scales, α near 0 and 1, near-singular covariances and a 1e5
- * offset. FD errors are printed (docs/notes-morse-grad.md quotes them). */
+ * offset. FD errors are printed (docs/notes-morse-grad.md quotes them). Also the grid
+ * closest point from critical cells where ∇A vanishes (a blob's core, a gap's middle). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,6 +12,7 @@
 #include <time.h>
 #include "core/mgs_core.h"
 #include "mgs_test.h"
+#include "train/mgs_morse.h"
 #include "train/mgs_morse_grad.h"
 #include "vdb/mgs_vdb.h"
 
@@ -216,6 +218,55 @@ static void test_sphere(void) {
   double far[3] = {100, 0, 0}, c[3];
   CHECK(mgs_morse_closest_point(g, NULL, &p, far, (float)tau, c, NULL, &err) == MGS_ERR_NUMERIC);
   mgs_gaussians_destroy(g);
+}
+
+/* ------------------------------------------------------ grid closest point, flat ∇A */
+/* A bar's end sits on a critical cell of d; deep inside a blob or midway across a gap ∇A
+   is zero there and Newton along ∇A cannot start. The analysis must still find the surface
+   point the end moves with (before the search fallback: none, so those bars got no
+   gradient — two thirds of the thin scene's H0 ends). */
+static void test_grid_closest_flat(void) {
+  const double sigma = 0.1, alpha = 0.9, tau = 0.5, h = 0.02;
+  const double rad = sigma * sqrt(2 * log(alpha / tau));
+  for (int two = 0; two < 2; two++) {
+    const double cx = two ? 0.2 : 0.0; /* one blob at 0, or two at ±0.2 */
+    mgs_gaussians *g = model(two ? 2 : 1);
+    for (int b = 0; b <= two; b++) {
+      g->mean[3 * b] = (float)(b ? -cx : cx);
+      for (int k = 0; k < 3; k++) g->log_scale[3 * b + k] = (float)log(sigma);
+      g->rot[4 * b] = 1.0f;
+      g->opacity[b] = (float)log(alpha / (1 - alpha));
+    }
+    mgs_vdb_alpha_params ap;
+    mgs_vdb_alpha_params_default(&ap);
+    ap.voxel_size = h;
+    mgs_vdb_grid *grid = NULL;
+    mgs_error err;
+    CHECK_OK(mgs_vdb_alpha_field(g, &ap, &grid, NULL, &err), &err);
+    if (!grid) { mgs_gaussians_destroy(g); return; }
+    /* the critical point exactly on a voxel centre: the grid's gradient there is zero */
+    double ijk[3] = {0, 0, 0}, x[3], c[3], gn = 0;
+    mgs_vdb_index_to_world(grid, ijk, x);
+    CHECK_NEAR(x[0], 0, 1e-12);
+    float xf[3] = {0, 0, 0}, gr[3], a0;
+    mgs_vdb_sample_gradient(grid, 1, xf, gr, &a0);
+    CHECK(gr[0] == 0 && gr[1] == 0 && gr[2] == 0);
+    CHECK(two ? a0 < tau : a0 > tau);
+    double expect = two ? cx - rad : rad; /* distance from x to {A = τ} */
+    CHECK(mgs_morse_grid_closest_point(grid, tau, x, expect + 2 * h, c, &gn) == 1);
+    double r0 = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    fprintf(stderr, "  %s: closest point at %.4f (surface at %.4f), |grad A| %.3f\n", two ? "gap middle" : "blob core",
+            r0, expect, gn);
+    CHECK(fabs(r0 - expect) < 0.5 * h); /* the filtered, trilinear field: within half a voxel */
+    CHECK(gn > 0);
+    float cf[3] = {(float)c[0], (float)c[1], (float)c[2]}, ac;
+    mgs_vdb_sample(grid, 1, cf, &ac);
+    CHECK_NEAR(ac, tau, 1e-3 * tau);
+    /* not beyond max_travel */
+    CHECK(mgs_morse_grid_closest_point(grid, tau, x, 0.5 * expect, c, &gn) == 0);
+    mgs_vdb_grid_destroy(grid);
+    mgs_gaussians_destroy(g);
+  }
 }
 
 /* The SDF the derivative is of: closest-point distances on the filtered k=3 field equal
@@ -564,6 +615,7 @@ int main(void) {
   RUN(test_index_update);
   RUN(test_sphere);
   RUN(test_sdf_matches_vdb);
+  RUN(test_grid_closest_flat);
   RUN(test_chain);
   RUN(test_flat_gradient_guard);
   RUN(test_cost);

@@ -2,7 +2,8 @@
  * initial points are cut into K compact blocks along a Morton curve of tiles
  * (train/mgs_partition.h); each rank trains its block plus ghost copies of the points
  * within a margin of it, on the training views that see it, and rank 0 merges the
- * Gaussians each rank owns (mean inside its block) into one model (MPI_Gatherv). One
+ * Gaussians each rank owns (mean inside its block) into one model (point-to-point, so
+ * a rank whose block never comes is named and the run ended: --mpi-timeout). One
  * process (-np 1) runs the serial trainer unchanged: the same model as `morsegs train`.
  *
  * This is the first slice of distributed training. Not done yet: ghosts are trained
@@ -10,12 +11,16 @@
  * training (blocks are independent until the merge), no migration of Gaussians across
  * blocks (a Gaussian that moves out of its block is merged by its final position, so the
  * union stays a partition), costs split by Gaussians only (not pixels), no per-rank
- * checkpoint/resume. A failing rank ends the whole run (MPI_Abort) with its message. */
+ * checkpoint/resume. A failing rank ends the whole run (MPI_Abort) with its message; a rank
+ * that dies is named by mpirun, which ends the others. */
 #include <limits.h>
+#include <signal.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 #include "apps/mgs_cli.h"
 #include "core/mgs_core.h"
 #include "render/mgs_visibility.h"
@@ -39,13 +44,14 @@ int mgs_cmd_train_mpi(int argc, char **argv) {
 typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
-  double margin; /* ghost margin in tiles */
+  double margin;  /* ghost margin in tiles */
+  double timeout; /* seconds rank 0 waits for the other blocks after its own (<0: automatic) */
   unsigned long long seed;
 } mpi_opts;
 
 static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap) {
   memset(o, 0, sizeof *o);
-  o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1;
+  o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1; o->timeout = -1;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     char *end = NULL;
@@ -56,6 +62,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--seed")) { if (!v) goto need; o->seed = strtoull(v, &end, 10); i++; if (*end || *v == '-') goto bad; }
     else if (!strcmp(a, "--image-cache-mb")) { if (!v) goto need; o->cache_mb = (int)strtol(v, &end, 10); i++; if (*end || o->cache_mb < 0) goto bad; }
     else if (!strcmp(a, "--ghost-margin")) { if (!v) goto need; o->margin = strtod(v, &end); i++; if (*end || !(o->margin >= 0)) goto bad; }
+    else if (!strcmp(a, "--mpi-timeout")) { if (!v) goto need; o->timeout = strtod(v, &end); i++; if (*end || !(o->timeout > 0)) goto bad; }
     else if (!strcmp(a, "--strategy")) { if (!v) goto need; i++; if (!strcmp(v, "adc")) o->strategy_adc = 1; else if (!strcmp(v, "none")) o->strategy_adc = 0; else goto bad; }
     else if (!strcmp(a, "--white")) o->white = 1;
     else if (!strcmp(a, "--black")) o->white = 0;
@@ -64,7 +71,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--quiet")) o->quiet = 1;
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -87,10 +94,76 @@ static void die(int rank, const char *what) {
   exit(1);
 }
 
+enum { TAG_HEAD = 11, TAG_BLOCK = 12 };
+
+/* Waits for rq[1..n-1] until `limit` seconds have passed; then names every rank whose
+   message has not come and ends the run. */
+static void wait_all(MPI_Request *rq, int n, double limit, const char *what, int explicit_limit) {
+  double t0 = MPI_Wtime();
+  for (;;) {
+    int done = 0;
+    MPI_Testall(n, rq, &done, MPI_STATUSES_IGNORE);
+    if (done) return;
+    if (MPI_Wtime() - t0 > limit) break;
+    struct timespec ts = {0, 2000000}; /* 2 ms: no busy loop while the others train */
+    nanosleep(&ts, NULL);
+  }
+  char msg[1024];
+  size_t len = (size_t)snprintf(msg, sizeof msg, "no %s from rank", what);
+  int missing = 0;
+  for (int r = 1; r < n && len < sizeof msg - 32; r++) {
+    int flag = 0;
+    if (rq[r] != MPI_REQUEST_NULL) MPI_Test(&rq[r], &flag, MPI_STATUS_IGNORE);
+    else flag = 1;
+    if (!flag) len += (size_t)snprintf(msg + len, sizeof msg - len, "%s %d", missing++ ? "," : "", r);
+  }
+  snprintf(msg + len, sizeof msg - len, " within %.0f s after this rank's block%s: the run is ended", limit,
+           explicit_limit ? " (--mpi-timeout)" : " (600 s + twice this rank's training time; --mpi-timeout S sets it)");
+  die(0, msg);
+}
+
+/* A rank that crashes says so before it goes (mpirun then ends the others); only
+   async-signal-safe calls here. A rank killed outright (SIGKILL, the OOM killer) is named
+   by mpirun alone, as process [[job,1],K]. */
+static int crash_rank = -1;
+static void on_crash(int sig) {
+  char msg[96] = "morsegs train --mpi: rank ";
+  size_t n = strlen(msg);
+  char num[16];
+  int k = 0, v = crash_rank < 0 ? 0 : crash_rank;
+  do { num[k++] = (char)('0' + v % 10); v /= 10; } while (v && k < 15);
+  while (k) msg[n++] = num[--k];
+  const char *tail = sig == SIGSEGV ? ": crashed (SIGSEGV)\n" : sig == SIGBUS ? ": crashed (SIGBUS)\n" :
+                     sig == SIGFPE ? ": crashed (SIGFPE)\n" : sig == SIGILL ? ": crashed (SIGILL)\n" : ": crashed (SIGABRT)\n";
+  for (const char *t = tail; *t && n < sizeof msg; t++) msg[n++] = *t;
+  ssize_t w = write(2, msg, n);
+  (void)w;
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
+static void name_crashes(int rank) {
+  crash_rank = rank;
+  const int sigs[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+  for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) signal(sigs[i], on_crash);
+}
+
+/* Fault injection for the tests (as SQLite tests its error paths): MGS_MPI_FAULT=hang:K
+   makes rank K never send its block; exit:K makes it die without a word; segv:K crash. */
+static void fault_point(int rank) {
+  const char *f = getenv("MGS_MPI_FAULT");
+  if (!f) return;
+  int k = -1;
+  if (sscanf(f, "hang:%d", &k) == 1 && k == rank)
+    for (;;) { struct timespec ts = {1, 0}; nanosleep(&ts, NULL); }
+  if (sscanf(f, "exit:%d", &k) == 1 && k == rank) _exit(3);
+  if (sscanf(f, "segv:%d", &k) == 1 && k == rank) raise(SIGSEGV);
+}
+
 static int train_blocks(const mpi_opts *mo, int rank, int size) {
   mgs_error err;
   mgs_error_clear(&err);
   double t_start = MPI_Wtime();
+  name_crashes(rank);
   mgs_dataset_options dopt;
   mgs_dataset_options_default(&dopt);
   dopt.white_background = mo->white;
@@ -177,24 +250,57 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   }
   free(keep);
   if (n_keep * (size_t)dims > INT_MAX) die(rank, "too many Gaussians for one MPI message");
+  fault_point(rank); /* test hook: MGS_MPI_FAULT */
+  /* the merge, point to point: rank 0 knows which rank it still waits for, and names it
+     when its message does not come (a collective would only hang) */
   int cnt = (int)(n_keep * (size_t)dims);
+  double loss = mgs_trainer_last_loss(t);
+  double head[7] = {(double)cnt, loss, train_s, (double)n_owned, (double)(n_local - n_owned), (double)kept, (double)n_keep};
   int *counts = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL, *displs = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL;
-  MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  double *heads = rank == 0 ? calloc((size_t)size * 7, sizeof(double)) : NULL;
+  float *all = NULL;
   long long total = 0;
-  if (rank == 0)
-    for (int r = 0; r < size; r++) { displs[r] = (int)total; total += counts[r]; }
-  if (rank == 0 && total > INT_MAX) die(rank, "the merged model is too large for one MPI message");
-  float *all = rank == 0 ? malloc((size_t)(total ? total : 1) * sizeof(float)) : NULL;
-  if (rank == 0 && !all) die(rank, "out of memory for the merged model");
-  MPI_Gatherv(pack, cnt, MPI_FLOAT, all, counts, displs, MPI_FLOAT, 0, MPI_COMM_WORLD);
+  if (rank != 0) {
+    MPI_Request rq[2];
+    MPI_Isend(head, 7, MPI_DOUBLE, 0, TAG_HEAD, MPI_COMM_WORLD, &rq[0]);
+    MPI_Isend(pack, cnt, MPI_FLOAT, 0, TAG_BLOCK, MPI_COMM_WORLD, &rq[1]);
+    MPI_Waitall(2, rq, MPI_STATUSES_IGNORE); /* rank 0 gone: mpirun ends this rank */
+  } else {
+    if (!counts || !displs || !heads) die(rank, "out of memory");
+    memcpy(heads, head, sizeof head);
+    double limit = mo->timeout > 0 ? mo->timeout : 600.0 + 2.0 * train_s;
+    MPI_Request *rq = malloc((size_t)size * sizeof *rq);
+    if (!rq) die(rank, "out of memory");
+    rq[0] = MPI_REQUEST_NULL;
+    for (int r = 1; r < size; r++) MPI_Irecv(heads + 7 * r, 7, MPI_DOUBLE, r, TAG_HEAD, MPI_COMM_WORLD, &rq[r]);
+    wait_all(rq, size, limit, "its block's summary", mo->timeout > 0);
+    for (int r = 0; r < size; r++) {
+      counts[r] = (int)heads[7 * r];
+      displs[r] = (int)total;
+      total += counts[r];
+    }
+    if (total > INT_MAX) die(rank, "the merged model is too large for one MPI message");
+    all = malloc((size_t)(total ? total : 1) * sizeof(float));
+    if (!all) die(rank, "out of memory for the merged model");
+    memcpy(all, pack, (size_t)cnt * sizeof(float));
+    for (int r = 1; r < size; r++) MPI_Irecv(all + displs[r], counts[r], MPI_FLOAT, r, TAG_BLOCK, MPI_COMM_WORLD, &rq[r]);
+    wait_all(rq, size, limit, "its block's Gaussians", mo->timeout > 0);
+    free(rq);
+  }
   free(pack);
-  /* scalars: loss mean, time balance */
-  double loss = mgs_trainer_last_loss(t), loss_sum = 0, tmax = 0, tsum = 0;
-  MPI_Reduce(&loss, &loss_sum, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-  MPI_Reduce(&train_s, &tmax, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
-  MPI_Reduce(&train_s, &tsum, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-  unsigned long long mine[4] = {n_owned, n_local - n_owned, kept, n_keep}, *rows = rank == 0 ? calloc((size_t)size * 4, sizeof *rows) : NULL;
-  MPI_Gather(mine, 4, MPI_UNSIGNED_LONG_LONG, rows, 4, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+  /* scalars: loss mean, time balance (from the summaries) */
+  double loss_sum = 0, tmax = 0, tsum = 0;
+  unsigned long long *rows = rank == 0 ? calloc((size_t)size * 4, sizeof *rows) : NULL;
+  if (rank == 0) {
+    if (!rows) die(rank, "out of memory");
+    for (int r = 0; r < size; r++) {
+      loss_sum += heads[7 * r + 1];
+      tmax = fmax(tmax, heads[7 * r + 2]);
+      tsum += heads[7 * r + 2];
+      for (int k = 0; k < 4; k++) rows[4 * r + k] = (unsigned long long)heads[7 * r + 3 + k];
+    }
+  }
+  free(heads);
   int rc = 0;
   if (rank == 0) {
     size_t n_all = (size_t)total / (size_t)dims;

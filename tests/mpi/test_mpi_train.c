@@ -1,10 +1,12 @@
 /* `morsegs train --mpi` through mpirun on one machine: -np 1 writes the same .ply bytes
  * as `morsegs train`; -np 2 and -np 4 partition the scene (every initial point owned by
  * one rank), train and merge a model whose Gaussians are the union of what each rank
- * owns; a bad option and a rank that fails end the run with a message naming them. */
+ * owns; a bad option and a rank that fails end the run with a message naming them; a
+ * rank that never sends its block (hangs) or dies ends the run, named, within bounds. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 #include <cjson/cJSON.h>
 #include "mgs_test.h"
@@ -21,6 +23,9 @@ static int sh(const char *fmt, const char *a, const char *b, int np) {
   snprintf(body, sizeof body, fmt, a ? a : "", b ? b : "");
   if (np > 0)
     snprintf(cmd, sizeof cmd, "MGS_THREADS=1 '%s' --oversubscribe -np %d '%s' %s > '%s' 2>&1", mpirun, np, cli, body, logp);
+  else if (np < 0) /* a run expected to fail: bounded, 124 when it had to be killed */
+    snprintf(cmd, sizeof cmd, "MGS_THREADS=1 timeout -k 5 120 '%s' --oversubscribe -np %d '%s' %s > '%s' 2>&1", mpirun, -np, cli,
+             body, logp);
   else
     snprintf(cmd, sizeof cmd, "MGS_THREADS=1 '%s' %s > '%s' 2>&1", cli, body, logp);
   int rc = system(cmd);
@@ -121,6 +126,41 @@ static void test_errors(void) {
   free(log);
 }
 
+/* A rank that hangs before sending its block: rank 0 names it after --mpi-timeout and the
+   run ends (MPI_Abort) instead of waiting for ever. A rank that dies: mpirun names it and
+   ends the others. Both bounded in time (the test fails rather than hangs: timeout(1)). */
+static void test_lost_rank(void) {
+  char run[700];
+  snprintf(run, sizeof run, "%s/lost", root);
+  time_t t0 = time(NULL);
+  setenv("MGS_MPI_FAULT", "hang:1", 1);
+  int rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet --mpi-timeout 3", data, run, -2);
+  unsetenv("MGS_MPI_FAULT");
+  char *log = slurp(logp);
+  CHECK_MSG(rc != 0 && rc != 124, "hang: exit %d (124: not ended by the timeout)", rc);
+  CHECK_MSG(log && strstr(log, "from rank 1 within 3 s"), "hang: log: %s", log ? log : "");
+  free(log);
+  setenv("MGS_MPI_FAULT", "exit:1", 1);
+  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet", data, run, -2);
+  unsetenv("MGS_MPI_FAULT");
+  log = slurp(logp);
+  CHECK_MSG(rc != 0 && rc != 124, "exit: exit %d (124: hung)", rc);
+  /* mpirun's own words: the process [[job,1],1] and its exit code */
+  CHECK_MSG(log && strstr(log, ",1],1]") && strstr(log, "Exit code:    3"), "exit: log: %s", log ? log : "");
+  free(log);
+  setenv("MGS_MPI_FAULT", "segv:1", 1);
+  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet", data, run, -2);
+  unsetenv("MGS_MPI_FAULT");
+  log = slurp(logp);
+  CHECK_MSG(rc != 0 && rc != 124, "segv: exit %d (124: hung)", rc);
+  CHECK_MSG(log && strstr(log, "rank 1: crashed (SIGSEGV)"), "segv: log: %s", log ? log : "");
+  free(log);
+  char ply[800];
+  snprintf(ply, sizeof ply, "%s/point_cloud/iteration_5/point_cloud.ply", run);
+  CHECK_MSG(!mgs_path_exists(ply), "a lost rank still wrote a merged model");
+  fprintf(stderr, "  lost rank: both runs ended in %ld s\n", (long)(time(NULL) - t0));
+}
+
 int main(int argc, char **argv) {
   cli = getenv("MGS_CLI");
   mpirun = argc > 1 ? argv[1] : "mpirun";
@@ -140,6 +180,7 @@ int main(int argc, char **argv) {
   RUN(test_np2);
   RUN(test_np4);
   RUN(test_errors);
+  RUN(test_lost_rank);
   mgs_remove_tree(root, &err);
   return mgs_test_finish();
 }

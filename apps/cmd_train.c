@@ -93,6 +93,8 @@ static void usage(FILE *f) {
     "      --view-order random|locality  locality: each epoch visits spatial chunks of views in turn\n"
     "                          (random chunk order, random within a chunk; default random as the reference)\n"
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
+    "                          (with --mpi: --ghost-margin TILES (1), --mpi-timeout S: how long rank 0 waits\n"
+    "                          for the other blocks after its own (600 + 2x its training time))\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

@@ -273,7 +273,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!rq) die(rank, "out of memory");
     rq[0] = MPI_REQUEST_NULL;
     for (int r = 1; r < size; r++) MPI_Irecv(heads + 7 * r, 7, MPI_DOUBLE, r, TAG_HEAD, MPI_COMM_WORLD, &rq[r]);
-    wait_all(rq, size, limit, "its block's summary", mo->timeout > 0);
+    wait_all(rq, size, limit, "block summary", mo->timeout > 0);
     for (int r = 0; r < size; r++) {
       counts[r] = (int)heads[7 * r];
       displs[r] = (int)total;
@@ -284,7 +284,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!all) die(rank, "out of memory for the merged model");
     memcpy(all, pack, (size_t)cnt * sizeof(float));
     for (int r = 1; r < size; r++) MPI_Irecv(all + displs[r], counts[r], MPI_FLOAT, r, TAG_BLOCK, MPI_COMM_WORLD, &rq[r]);
-    wait_all(rq, size, limit, "its block's Gaussians", mo->timeout > 0);
+    wait_all(rq, size, limit, "block of Gaussians", mo->timeout > 0);
     free(rq);
   }
   free(pack);

@@ -94,7 +94,8 @@ static void usage(FILE *f) {
     "                          (random chunk order, random within a chunk; default random as the reference)\n"
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "                          (with --mpi: --ghost-margin TILES (1), --mpi-timeout S: how long rank 0 waits\n"
-    "                          for the other blocks after its own (600 + 2x its training time))\n"
+    "                          for the other blocks after its own (600 + 2x its training time);\n"
+    "                          --checkpoint-every, --resume and --force per rank: RUN/ranks/rank_K.mgsckpt)\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

@@ -10,10 +10,12 @@
  * locally rather than read-only and are never exchanged with their owners during
  * training (blocks are independent until the merge), no migration of Gaussians across
  * blocks (a Gaussian that moves out of its block is merged by its final position, so the
- * union stays a partition), costs split by Gaussians only (not pixels), no per-rank
- * checkpoint/resume. A failing rank ends the whole run (MPI_Abort) with its message; a rank
- * that dies is named by mpirun, which ends the others. */
+ * union stays a partition), costs split by Gaussians only (not pixels).
+ * Each rank checkpoints its block (RUN/ranks/rank_K.mgsckpt); --resume continues every
+ * rank. A failing rank ends the whole run (MPI_Abort) with its message; a rank that dies
+ * is named by mpirun, which ends the others. */
 #include <limits.h>
+#include <dirent.h>
 #include <signal.h>
 #include <math.h>
 #include <stdio.h>
@@ -44,6 +46,7 @@ int mgs_cmd_train_mpi(int argc, char **argv) {
 typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
+  int checkpoint_every, resume, force;
   double margin;  /* ghost margin in tiles */
   double timeout; /* seconds rank 0 waits for the other blocks after its own (<0: automatic) */
   unsigned long long seed;
@@ -52,6 +55,7 @@ typedef struct mpi_opts {
 static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap) {
   memset(o, 0, sizeof *o);
   o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1; o->timeout = -1;
+  o->checkpoint_every = 1000;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     char *end = NULL;
@@ -69,9 +73,12 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--sparse-adam")) o->sparse = 1;
     else if (!strcmp(a, "--dense-adam")) o->sparse = 0;
     else if (!strcmp(a, "--quiet")) o->quiet = 1;
+    else if (!strcmp(a, "--resume")) o->resume = 1;
+    else if (!strcmp(a, "--force")) o->force = 1;
+    else if (!strcmp(a, "--checkpoint-every")) { if (!v) goto need; o->checkpoint_every = (int)strtol(v, &end, 10); i++; if (*end || o->checkpoint_every < 0) goto bad; }
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --checkpoint-every, --resume, --force, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -83,6 +90,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     return 0;
   }
   if (!o->data || !o->run) { snprintf(msg, cap, "DATA and -o RUN are required"); return 0; }
+  if (o->resume && o->force) { snprintf(msg, cap, "--resume and --force exclude each other"); return 0; }
   return 1;
 }
 
@@ -158,6 +166,13 @@ static void fault_point(int rank) {
   if (sscanf(f, "exit:%d", &k) == 1 && k == rank) _exit(3);
   if (sscanf(f, "segv:%d", &k) == 1 && k == rank) raise(SIGSEGV);
 }
+/* MGS_MPI_FAULT=exit-at:K:N: rank K dies once iteration N is complete (0: no fault). */
+static int fault_iteration(int rank) {
+  const char *f = getenv("MGS_MPI_FAULT");
+  int k = -1, n = 0;
+  if (f && sscanf(f, "exit-at:%d:%d", &k, &n) == 2 && k == rank && n > 0) return n;
+  return 0;
+}
 
 static int train_blocks(const mpi_opts *mo, int rank, int size) {
   mgs_error err;
@@ -222,13 +237,36 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   o.visibility = -1;
   o.sparse_adam = mo->sparse;
   o.image_cache_mb = (size_t)mo->cache_mb;
+  /* each rank checkpoints its own block: RUN/ranks/rank_K.mgsckpt */
+  char ck_name[64];
+  snprintf(ck_name, sizeof ck_name, "ranks/rank_%d.mgsckpt", rank);
+  char *ckpt = mgs_path_join(mo->run, ck_name);
+  if (!ckpt) die(rank, "out of memory");
+  o.checkpoint_every = mo->checkpoint_every;
+  o.checkpoint_path = ckpt;
   o.adc.white_background = mo->white;
   mgs_trainer *t = NULL;
   if (mgs_trainer_create(&sub, &o, g0, mo->strategy_adc ? mgs_strategy_adc_create(&o.adc) : NULL, &t, &err)) die(rank, err.msg);
   if (!mo->quiet)
     mgs_info("rank %d of %d: %zu owned + %zu ghost Gaussians, %zu of %zu training views", rank, size, n_owned,
              n_local - n_owned, kept, nv);
+  if (mo->resume) {
+    if (!mgs_path_exists(ckpt)) {
+      char m2[1200];
+      snprintf(m2, sizeof m2, "%s: no checkpoint of this rank to resume from", ckpt);
+      die(rank, m2);
+    }
+    if (mgs_trainer_load_checkpoint(t, ckpt, &err)) die(rank, err.msg);
+    fprintf(stderr, "morsegs train --mpi: rank %d: resumed from %s at iteration %d\n", rank, ckpt, mgs_trainer_iteration(t));
+  } else if (mo->checkpoint_every > 0 && mgs_trainer_save_checkpoint(t, ckpt, &err)) {
+    die(rank, err.msg); /* from here on a run killed at any moment can --resume */
+  }
   double t0 = MPI_Wtime();
+  int stop_at = fault_iteration(rank);
+  if (stop_at > 0) {
+    if (mgs_trainer_run_until(t, stop_at, &err)) die(rank, err.msg);
+    _exit(3);
+  }
   if (mgs_trainer_run(t, &err)) die(rank, err.msg);
   double train_s = MPI_Wtime() - t0;
   /* the Gaussians this rank owns by their final means, packed group by group */
@@ -366,10 +404,54 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   }
   free(all); free(counts); free(displs); free(rows);
   mgs_trainer_destroy(t);
+  free(ckpt);
   free(views);
   mgs_partition_destroy(part);
   mgs_dataset_destroy(ds);
   return rc;
+}
+
+static int has_entries(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  struct dirent *e;
+  int any = 0;
+  while (!any && (e = readdir(d))) any = strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+  closedir(d);
+  return any;
+}
+
+/* Rank 0 decides whether RUN may be used (nothing a user had is overwritten without
+   --force; --resume needs the same number of ranks) and records the layout; every rank
+   learns the verdict. Returns 0 to go on, else the message is in msg (all ranks). */
+static int check_run(const mpi_opts *mo, int rank, int size, char *msg, size_t cap) {
+  int bad = 0;
+  msg[0] = 0;
+  if (rank == 0) {
+    mgs_error err;
+    char *ranks = mgs_path_join(mo->run, "ranks"), *layout = mgs_path_join(mo->run, "ranks/layout.txt");
+    if (!ranks || !layout) { snprintf(msg, cap, "out of memory"); bad = 1; }
+    else if (mo->resume) {
+      char *text = NULL;
+      size_t n = 0;
+      int was = 0;
+      if (mgs_read_file(layout, &text, &n, &err)) { snprintf(msg, cap, "%s: nothing to resume (%s)", mo->run, err.msg); bad = 1; }
+      else if (sscanf(text, "ranks %d", &was) != 1 || was < 1) { snprintf(msg, cap, "%s: not a layout file", layout); bad = 1; }
+      else if (was != size) { snprintf(msg, cap, "%s was trained on %d ranks: resume it with mpirun -np %d (not %d)", mo->run, was, was, size); bad = 1; }
+      free(text);
+    } else if (mgs_is_dir(mo->run) && has_entries(mo->run) && !mo->force) {
+      snprintf(msg, cap, "%s: run folder exists and is not empty (use --force to replace it or --resume to continue)", mo->run);
+      bad = 1;
+    } else {
+      char text[64];
+      int len = snprintf(text, sizeof text, "ranks %d\n", size);
+      if (mgs_mkdir_p(ranks, &err) || mgs_write_file_atomic(layout, text, (size_t)len, &err)) { snprintf(msg, cap, "%s", err.msg); bad = 1; }
+    }
+    free(ranks); free(layout);
+  }
+  MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  MPI_Bcast(msg, (int)cap, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return bad;
 }
 
 int mgs_cmd_train_mpi(int argc, char **argv) {
@@ -392,8 +474,13 @@ int mgs_cmd_train_mpi(int argc, char **argv) {
     free(av);
   } else {
     mpi_opts mo;
-    char msg[512];
+    char msg[1200];
     if (!parse_opts(argc, argv, &mo, msg, sizeof msg)) {
+      if (rank == 0) fprintf(stderr, "morsegs train --mpi: %s\n", msg);
+      MPI_Finalize();
+      return 2;
+    }
+    if (check_run(&mo, rank, size, msg, sizeof msg)) {
       if (rank == 0) fprintf(stderr, "morsegs train --mpi: %s\n", msg);
       MPI_Finalize();
       return 2;

@@ -2,7 +2,8 @@
  * as `morsegs train`; -np 2 and -np 4 partition the scene (every initial point owned by
  * one rank), train and merge a model whose Gaussians are the union of what each rank
  * owns; a bad option and a rank that fails end the run with a message naming them; a
- * rank that never sends its block (hangs) or dies ends the run, named, within bounds. */
+ * rank that never sends its block (hangs) or dies ends the run, named, within bounds; a
+ * run cut by a dead rank resumes from every rank's checkpoint to the same model. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -134,14 +135,14 @@ static void test_lost_rank(void) {
   snprintf(run, sizeof run, "%s/lost", root);
   time_t t0 = time(NULL);
   setenv("MGS_MPI_FAULT", "hang:1", 1);
-  int rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet --mpi-timeout 3", data, run, -2);
+  int rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet --force --mpi-timeout 3", data, run, -2);
   unsetenv("MGS_MPI_FAULT");
   char *log = slurp(logp);
   CHECK_MSG(rc != 0 && rc != 124, "hang: exit %d (124: not ended by the timeout)", rc);
   CHECK_MSG(log && strstr(log, "from rank 1 within 3 s"), "hang: log: %s", log ? log : "");
   free(log);
   setenv("MGS_MPI_FAULT", "exit:1", 1);
-  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet", data, run, -2);
+  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet --force", data, run, -2);
   unsetenv("MGS_MPI_FAULT");
   log = slurp(logp);
   CHECK_MSG(rc != 0 && rc != 124, "exit: exit %d (124: hung)", rc);
@@ -149,7 +150,7 @@ static void test_lost_rank(void) {
   CHECK_MSG(log && strstr(log, ",1],1]") && strstr(log, "Exit code:    3"), "exit: log: %s", log ? log : "");
   free(log);
   setenv("MGS_MPI_FAULT", "segv:1", 1);
-  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet", data, run, -2);
+  rc = sh("train --mpi '%s' -o '%s' --iters 5 --seed 1 --quiet --force", data, run, -2);
   unsetenv("MGS_MPI_FAULT");
   log = slurp(logp);
   CHECK_MSG(rc != 0 && rc != 124, "segv: exit %d (124: hung)", rc);
@@ -159,6 +160,43 @@ static void test_lost_rank(void) {
   snprintf(ply, sizeof ply, "%s/point_cloud/iteration_5/point_cloud.ply", run);
   CHECK_MSG(!mgs_path_exists(ply), "a lost rank still wrote a merged model");
   fprintf(stderr, "  lost rank: both runs ended in %ld s\n", (long)(time(NULL) - t0));
+}
+
+/* Per-rank checkpoints: rank 1 dies at iteration 25 of 40 (its last checkpoint at 20; rank
+   0 is ended by mpirun wherever it was); the same command with --resume finishes, and the
+   merged model is byte-identical to an uninterrupted run. Resuming on another number of
+   ranks, or reusing a non-empty RUN without --force, is refused. */
+static void test_resume(void) {
+  char ref[700], cut[700], pa[800], pb[800];
+  snprintf(ref, sizeof ref, "%s/resume_ref", root);
+  snprintf(cut, sizeof cut, "%s/resume_cut", root);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 40 --seed 3 --checkpoint-every 10 --quiet", data, ref, 2) == 0);
+  setenv("MGS_MPI_FAULT", "exit-at:1:25", 1);
+  int rc = sh("train --mpi '%s' -o '%s' --iters 40 --seed 3 --checkpoint-every 10 --quiet", data, cut, -2);
+  unsetenv("MGS_MPI_FAULT");
+  CHECK_MSG(rc != 0 && rc != 124, "the cut run: exit %d", rc);
+  snprintf(pb, sizeof pb, "%s/point_cloud/iteration_40/point_cloud.ply", cut);
+  CHECK(!mgs_path_exists(pb));
+  snprintf(pa, sizeof pa, "%s/ranks/rank_1.mgsckpt", cut);
+  CHECK(mgs_path_exists(pa));
+  /* not on another number of ranks */
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 40 --seed 3 --checkpoint-every 10 --quiet --resume", data, cut, 4) == 2);
+  char *log = slurp(logp);
+  CHECK_MSG(log && strstr(log, "trained on 2 ranks"), "log: %s", log ? log : "");
+  free(log);
+  /* not over a run without --force */
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 40 --seed 3 --quiet", data, cut, 2) == 2);
+  log = slurp(logp);
+  CHECK_MSG(log && strstr(log, "not empty"), "log: %s", log ? log : "");
+  free(log);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 40 --seed 3 --checkpoint-every 10 --quiet --resume", data, cut, 2) == 0);
+  log = slurp(logp);
+  /* it did resume (a fresh run would give the same model too): rank 1 from its checkpoint
+     at 20, before it died at 25 */
+  CHECK_MSG(log && strstr(log, "rank 1: resumed from") && strstr(log, "rank_1.mgsckpt at iteration 20"), "log: %s", log ? log : "");
+  free(log);
+  snprintf(pa, sizeof pa, "%s/point_cloud/iteration_40/point_cloud.ply", ref);
+  CHECK_MSG(same_file(pa, pb), "a resumed -np 2 run differs from the uninterrupted one (%s, %s)", pa, pb);
 }
 
 int main(int argc, char **argv) {
@@ -181,6 +219,7 @@ int main(int argc, char **argv) {
   RUN(test_np4);
   RUN(test_errors);
   RUN(test_lost_rank);
+  RUN(test_resume);
   mgs_remove_tree(root, &err);
   return mgs_test_finish();
 }

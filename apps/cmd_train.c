@@ -95,7 +95,8 @@ static void usage(FILE *f) {
     "      --mpi               under mpirun -np K: K spatial blocks trained and merged (-np 1 = serial)\n"
     "                          (with --mpi: --ghost-margin TILES (1), --mpi-timeout S: how long rank 0 waits\n"
     "                          for the other blocks after its own (600 + 2x its training time);\n"
-    "                          --checkpoint-every, --resume and --force per rank: RUN/ranks/rank_K.mgsckpt)\n"
+    "                          --checkpoint-every, --resume and --force per rank: RUN/ranks/rank_K.mgsckpt;\n"
+    "                          --vdb-resolution R: the merged point_cloud.vdb, built by blocks)\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

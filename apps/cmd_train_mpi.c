@@ -31,6 +31,7 @@
 #include "train/mgs_partition.h"
 #ifdef MGS_HAVE_MPI
 #include <mpi.h>
+#include "apps/train_mpi.h"
 #endif
 
 int mgs_cmd_train(int argc, char **argv);
@@ -47,6 +48,7 @@ typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
   int checkpoint_every, resume, force;
+  int vdb_resolution; /* > 0: the merged model's .vdb, built by blocks */
   double margin;  /* ghost margin in tiles */
   double timeout; /* seconds rank 0 waits for the other blocks after its own (<0: automatic) */
   unsigned long long seed;
@@ -74,11 +76,12 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--dense-adam")) o->sparse = 0;
     else if (!strcmp(a, "--quiet")) o->quiet = 1;
     else if (!strcmp(a, "--resume")) o->resume = 1;
+    else if (!strcmp(a, "--vdb-resolution")) { if (!v) goto need; o->vdb_resolution = (int)strtol(v, &end, 10); i++; if (*end || o->vdb_resolution < 8 || o->vdb_resolution > 100000) goto bad; }
     else if (!strcmp(a, "--force")) o->force = 1;
     else if (!strcmp(a, "--checkpoint-every")) { if (!v) goto need; o->checkpoint_every = (int)strtol(v, &end, 10); i++; if (*end || o->checkpoint_every < 0) goto bad; }
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --checkpoint-every, --resume, --force, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -94,8 +97,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
   return 1;
 }
 
-/* Ends every rank: a message naming this rank, then MPI_Abort. */
-static void die(int rank, const char *what) {
+void mgs_mpi_die(int rank, const char *what) {
   fprintf(stderr, "morsegs train --mpi: rank %d: %s\n", rank, what);
   fflush(stderr);
   MPI_Abort(MPI_COMM_WORLD, 1);
@@ -104,9 +106,7 @@ static void die(int rank, const char *what) {
 
 enum { TAG_HEAD = 11, TAG_BLOCK = 12 };
 
-/* Waits for rq[1..n-1] until `limit` seconds have passed; then names every rank whose
-   message has not come and ends the run. */
-static void wait_all(MPI_Request *rq, int n, double limit, const char *what, int explicit_limit) {
+void mgs_mpi_wait_all(MPI_Request *rq, int n, double limit, const char *what, int explicit_limit) {
   double t0 = MPI_Wtime();
   for (;;) {
     int done = 0;
@@ -127,7 +127,7 @@ static void wait_all(MPI_Request *rq, int n, double limit, const char *what, int
   }
   snprintf(msg + len, sizeof msg - len, " within %.0f s after this rank's block%s: the run is ended", limit,
            explicit_limit ? " (--mpi-timeout)" : " (600 s + twice this rank's training time; --mpi-timeout S sets it)");
-  die(0, msg);
+  mgs_mpi_die(0, msg);
 }
 
 /* A rank that crashes says so before it goes (mpirun then ends the others); only
@@ -184,17 +184,17 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   dopt.white_background = mo->white;
   dopt.load_images = 0; /* each rank decodes only the views it trains on */
   mgs_dataset *ds = NULL;
-  if (mgs_dataset_load(mo->data, &dopt, &ds, &err)) die(rank, err.msg);
-  if (!ds->init_points || ds->init_points->n == 0) die(rank, "the dataset has no initial points (points3d.ply / SfM points): needed to partition the scene");
+  if (mgs_dataset_load(mo->data, &dopt, &ds, &err)) mgs_mpi_die(rank, err.msg);
+  if (!ds->init_points || ds->init_points->n == 0) mgs_mpi_die(rank, "the dataset has no initial points (points3d.ply / SfM points): needed to partition the scene");
   const mgs_point_cloud *pc = ds->init_points;
   mgs_partition *part = NULL;
-  if (mgs_partition_build(pc->xyz, pc->n, size, 0, &part, &err)) die(rank, err.msg);
+  if (mgs_partition_build(pc->xyz, pc->n, size, 0, &part, &err)) mgs_mpi_die(rank, err.msg);
   /* owned points and ghosts within the margin of the block's box */
   double m = mo->margin * part->tile;
   const double *lo = part->lo[rank], *hi = part->hi[rank];
   size_t n_local = 0, n_owned = 0;
   float *xyz = malloc(pc->n * 3 * sizeof(float)), *rgb = malloc(pc->n * 3 * sizeof(float));
-  if (!xyz || !rgb) die(rank, "out of memory");
+  if (!xyz || !rgb) mgs_mpi_die(rank, "out of memory");
   for (size_t i = 0; i < pc->n; i++) {
     const float *p = pc->xyz + 3 * i;
     int own = mgs_partition_owner(part, p) == rank;
@@ -206,9 +206,9 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     n_local++;
     n_owned += own;
   }
-  if (n_owned == 0) die(rank, "the partition gave this rank no points (fewer tiles than ranks?)");
+  if (n_owned == 0) mgs_mpi_die(rank, "the partition gave this rank no points (fewer tiles than ranks?)");
   mgs_gaussians *g0 = NULL;
-  if (mgs_init_from_points(xyz, rgb, n_local, mo->sh_degree, &g0, &err)) die(rank, err.msg);
+  if (mgs_init_from_points(xyz, rgb, n_local, mo->sh_degree, &g0, &err)) mgs_mpi_die(rank, err.msg);
   free(xyz); free(rgb);
   /* the training views that see this block: its Gaussians' tiles in their frustum */
   mgs_visibility *vis = mgs_visibility_create(part->tile);
@@ -216,15 +216,15 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   mgs_raster_settings_default(&rs);
   size_t nv = ds->n_views[MGS_SPLIT_TRAIN], kept = 0;
   mgs_view *views = malloc((nv ? nv : 1) * sizeof *views);
-  if (!vis || !views) die(rank, "out of memory");
+  if (!vis || !views) mgs_mpi_die(rank, "out of memory");
   for (size_t v = 0; v < nv; v++) {
     const uint32_t *idx;
     size_t n_idx;
-    if (mgs_visibility_query(vis, g0, &ds->views[MGS_SPLIT_TRAIN][v].cam, &rs, &idx, &n_idx, &err)) die(rank, err.msg);
+    if (mgs_visibility_query(vis, g0, &ds->views[MGS_SPLIT_TRAIN][v].cam, &rs, &idx, &n_idx, &err)) mgs_mpi_die(rank, err.msg);
     if (n_idx > 0) views[kept++] = ds->views[MGS_SPLIT_TRAIN][v];
   }
   mgs_visibility_destroy(vis);
-  if (!kept) die(rank, "no training view sees this rank's block");
+  if (!kept) mgs_mpi_die(rank, "no training view sees this rank's block");
   /* a dataset holding those views (borrowed, so never destroyed as a whole) */
   mgs_dataset sub = *ds;
   sub.views[MGS_SPLIT_TRAIN] = views;
@@ -241,12 +241,12 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   char ck_name[64];
   snprintf(ck_name, sizeof ck_name, "ranks/rank_%d.mgsckpt", rank);
   char *ckpt = mgs_path_join(mo->run, ck_name);
-  if (!ckpt) die(rank, "out of memory");
+  if (!ckpt) mgs_mpi_die(rank, "out of memory");
   o.checkpoint_every = mo->checkpoint_every;
   o.checkpoint_path = ckpt;
   o.adc.white_background = mo->white;
   mgs_trainer *t = NULL;
-  if (mgs_trainer_create(&sub, &o, g0, mo->strategy_adc ? mgs_strategy_adc_create(&o.adc) : NULL, &t, &err)) die(rank, err.msg);
+  if (mgs_trainer_create(&sub, &o, g0, mo->strategy_adc ? mgs_strategy_adc_create(&o.adc) : NULL, &t, &err)) mgs_mpi_die(rank, err.msg);
   if (!mo->quiet)
     mgs_info("rank %d of %d: %zu owned + %zu ghost Gaussians, %zu of %zu training views", rank, size, n_owned,
              n_local - n_owned, kept, nv);
@@ -254,31 +254,31 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!mgs_path_exists(ckpt)) {
       char m2[1200];
       snprintf(m2, sizeof m2, "%s: no checkpoint of this rank to resume from", ckpt);
-      die(rank, m2);
+      mgs_mpi_die(rank, m2);
     }
-    if (mgs_trainer_load_checkpoint(t, ckpt, &err)) die(rank, err.msg);
+    if (mgs_trainer_load_checkpoint(t, ckpt, &err)) mgs_mpi_die(rank, err.msg);
     fprintf(stderr, "morsegs train --mpi: rank %d: resumed from %s at iteration %d\n", rank, ckpt, mgs_trainer_iteration(t));
   } else if (mo->checkpoint_every > 0 && mgs_trainer_save_checkpoint(t, ckpt, &err)) {
-    die(rank, err.msg); /* from here on a run killed at any moment can --resume */
+    mgs_mpi_die(rank, err.msg); /* from here on a run killed at any moment can --resume */
   }
   double t0 = MPI_Wtime();
   int stop_at = fault_iteration(rank);
   if (stop_at > 0) {
-    if (mgs_trainer_run_until(t, stop_at, &err)) die(rank, err.msg);
+    if (mgs_trainer_run_until(t, stop_at, &err)) mgs_mpi_die(rank, err.msg);
     _exit(3);
   }
-  if (mgs_trainer_run(t, &err)) die(rank, err.msg);
+  if (mgs_trainer_run(t, &err)) mgs_mpi_die(rank, err.msg);
   double train_s = MPI_Wtime() - t0;
   /* the Gaussians this rank owns by their final means, packed group by group */
   const mgs_gaussians *g = mgs_trainer_model(t);
   size_t n_keep = 0;
   uint8_t *keep = malloc(g->n ? g->n : 1);
-  if (!keep) die(rank, "out of memory");
+  if (!keep) mgs_mpi_die(rank, "out of memory");
   for (size_t i = 0; i < g->n; i++) n_keep += keep[i] = (uint8_t)(mgs_partition_owner(part, g->mean + 3 * i) == rank);
   int dims = 0;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) dims += mgs_param_dim((mgs_param_group)k);
   float *pack = malloc((n_keep ? n_keep : 1) * (size_t)dims * sizeof(float));
-  if (!pack) die(rank, "out of memory");
+  if (!pack) mgs_mpi_die(rank, "out of memory");
   size_t off = 0;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) {
     int d = mgs_param_dim((mgs_param_group)k);
@@ -287,7 +287,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       if (keep[i]) { memcpy(pack + off, src + i * (size_t)d, (size_t)d * sizeof(float)); off += (size_t)d; }
   }
   free(keep);
-  if (n_keep * (size_t)dims > INT_MAX) die(rank, "too many Gaussians for one MPI message");
+  if (n_keep * (size_t)dims > INT_MAX) mgs_mpi_die(rank, "too many Gaussians for one MPI message");
   fault_point(rank); /* test hook: MGS_MPI_FAULT */
   /* the merge, point to point: rank 0 knows which rank it still waits for, and names it
      when its message does not come (a collective would only hang) */
@@ -304,25 +304,25 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     MPI_Isend(pack, cnt, MPI_FLOAT, 0, TAG_BLOCK, MPI_COMM_WORLD, &rq[1]);
     MPI_Waitall(2, rq, MPI_STATUSES_IGNORE); /* rank 0 gone: mpirun ends this rank */
   } else {
-    if (!counts || !displs || !heads) die(rank, "out of memory");
+    if (!counts || !displs || !heads) mgs_mpi_die(rank, "out of memory");
     memcpy(heads, head, sizeof head);
     double limit = mo->timeout > 0 ? mo->timeout : 600.0 + 2.0 * train_s;
     MPI_Request *rq = malloc((size_t)size * sizeof *rq);
-    if (!rq) die(rank, "out of memory");
+    if (!rq) mgs_mpi_die(rank, "out of memory");
     rq[0] = MPI_REQUEST_NULL;
     for (int r = 1; r < size; r++) MPI_Irecv(heads + 7 * r, 7, MPI_DOUBLE, r, TAG_HEAD, MPI_COMM_WORLD, &rq[r]);
-    wait_all(rq, size, limit, "block summary", mo->timeout > 0);
+    mgs_mpi_wait_all(rq, size, limit, "block summary", mo->timeout > 0);
     for (int r = 0; r < size; r++) {
       counts[r] = (int)heads[7 * r];
       displs[r] = (int)total;
       total += counts[r];
     }
-    if (total > INT_MAX) die(rank, "the merged model is too large for one MPI message");
+    if (total > INT_MAX) mgs_mpi_die(rank, "the merged model is too large for one MPI message");
     all = malloc((size_t)(total ? total : 1) * sizeof(float));
-    if (!all) die(rank, "out of memory for the merged model");
+    if (!all) mgs_mpi_die(rank, "out of memory for the merged model");
     memcpy(all, pack, (size_t)cnt * sizeof(float));
     for (int r = 1; r < size; r++) MPI_Irecv(all + displs[r], counts[r], MPI_FLOAT, r, TAG_BLOCK, MPI_COMM_WORLD, &rq[r]);
-    wait_all(rq, size, limit, "block of Gaussians", mo->timeout > 0);
+    mgs_mpi_wait_all(rq, size, limit, "block of Gaussians", mo->timeout > 0);
     free(rq);
   }
   free(pack);
@@ -330,7 +330,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   double loss_sum = 0, tmax = 0, tsum = 0;
   unsigned long long *rows = rank == 0 ? calloc((size_t)size * 4, sizeof *rows) : NULL;
   if (rank == 0) {
-    if (!rows) die(rank, "out of memory");
+    if (!rows) mgs_mpi_die(rank, "out of memory");
     for (int r = 0; r < size; r++) {
       loss_sum += heads[7 * r + 1];
       tmax = fmax(tmax, heads[7 * r + 2]);
@@ -340,11 +340,12 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   }
   free(heads);
   int rc = 0;
+  mgs_gaussians *merged = NULL;
   if (rank == 0) {
     size_t n_all = (size_t)total / (size_t)dims;
-    mgs_gaussians *merged = mgs_gaussians_create(n_all ? n_all : 1, g->sh_degree);
+    merged = mgs_gaussians_create(n_all ? n_all : 1, g->sh_degree);
     size_t first;
-    if (!merged || mgs_gaussians_append(merged, n_all, &first, &err)) die(rank, "out of memory for the merged model");
+    if (!merged || mgs_gaussians_append(merged, n_all, &first, &err)) mgs_mpi_die(rank, "out of memory for the merged model");
     /* unpack rank by rank: each block is its ranks' rows, group by group */
     size_t row0 = 0;
     for (int r = 0; r < size; r++) {
@@ -384,7 +385,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       char *path = mgs_path_join(mo->run, "mpi_stats.json");
       size_t cap = 512 + (size_t)size * 160, len = 0;
       char *text = malloc(cap);
-      if (!path || !text) die(rank, "out of memory");
+      if (!path || !text) mgs_mpi_die(rank, "out of memory");
       len += (size_t)snprintf(text + len, cap - len, "{\n  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
                               "  \"train_seconds_max\": %.3f,\n  \"load_imbalance\": %.3f,\n  \"bytes_gathered\": %lld,\n"
                               "  \"seconds\": %.3f,\n  \"per_rank\": [\n", size, n_all, loss_sum / size, tmax,
@@ -396,12 +397,26 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       st = mgs_write_file_atomic(path, text, len, &err);
       free(path); free(text);
     }
-    if (st) { fprintf(stderr, "morsegs train --mpi: rank 0: %s\n", err.msg); rc = 1; }
-    else if (!mo->quiet)
+    if (st) mgs_mpi_die(rank, err.msg); /* the others wait in the .vdb step otherwise */
+    if (!mo->quiet)
       printf("trained %d blocks on %d ranks (%d iterations each): %zu Gaussians merged -> %s/point_cloud/iteration_%d/point_cloud.ply\n",
              size, size, mo->iters, n_all, mo->run, mo->iters);
-    mgs_gaussians_destroy(merged);
   }
+  if (mo->vdb_resolution > 0) {
+    char name[96];
+    snprintf(name, sizeof name, "point_cloud/iteration_%d/point_cloud.vdb", mo->iters);
+    char *vdb = mgs_path_join(mo->run, name);
+    if (!vdb) mgs_mpi_die(rank, "out of memory");
+    double t_vdb = MPI_Wtime();
+    unsigned long long mine_vox = 0, all_vox = 0;
+    mgs_mpi_merged_vdb(merged, part, rank, size, mo->vdb_resolution, mo->timeout > 0 ? mo->timeout : 600.0, mo->timeout > 0,
+                       vdb, &mine_vox);
+    MPI_Reduce(&mine_vox, &all_vox, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
+    if (rank == 0 && !mo->quiet)
+      printf("merged .vdb by blocks: %llu alpha voxels from %d ranks, %.2f s -> %s\n", all_vox, size, MPI_Wtime() - t_vdb, vdb);
+    free(vdb);
+  }
+  mgs_gaussians_destroy(merged);
   free(all); free(counts); free(displs); free(rows);
   mgs_trainer_destroy(t);
   free(ckpt);

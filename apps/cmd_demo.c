@@ -104,6 +104,9 @@ static int stage_train(demo_ctx *ctx, demo_run *r) {
     args[n++] = "--preset"; args[n++] = r->preset;
     args[n++] = "--morse-warmup"; args[n++] = warmup;
     args[n++] = "--morse-every"; args[n++] = every;
+    /* half the default analysis resolution: the demo stays at about a minute (256 doubles
+       the morse-full run on this scene; README) */
+    args[n++] = "--morse-resolution"; args[n++] = "128";
   }
   if (ctx->quiet) args[n++] = "--quiet";
   args[n] = NULL;
@@ -160,7 +163,8 @@ static void demo_usage(FILE *f) {
   for (size_t i = 0; i < N_STAGES; i++) fprintf(f, "  %2zu. %-13s %s\n", i + 1, stages[i].name, stages[i].what);
   fprintf(f, "options:\n  -o, --output DIR  output folder (demo-out)\n  --force           rebuild outputs that exist\n"
              "  --iters N         training iterations of both runs (2000); the morse-full run's analysis\n"
-             "                    starts at N/4 and repeats every N/8 iterations (--morse-warmup/--morse-every)\n"
+             "                    starts at N/4 and repeats every N/8 iterations (--morse-warmup/--morse-every),\n"
+             "                    at --morse-resolution 128 (the default 256 doubles its time)\n"
              "  --baseline-only   skip the morse-full run (the *-morse stages): under half the time\n"
              "  -q, --quiet       no progress output\n  -h, --help        this text\n");
 }

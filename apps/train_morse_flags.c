@@ -23,7 +23,7 @@ const char *train_morse_flags_usage =
     "      --beta B (0.003, in units of eps-sig squared)  --eps-sig E (0.02)  --eps-p E (0.01)  --topo-dims 0,1,2\n"
     "      --min-bar V         bars shorter than V voxels stay out of L_topo (0.5)\n"
     "      --morse-every K (500)  --morse-warmup W (3000)  --morse-until U (15000)\n"
-    "      --morse-resolution R (128)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"
+    "      --morse-resolution R (256)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"
     "      --gap-max G (0.05)  --min-cameras M (3)  --floater-volume F (0.01)  --floater-mass F (0.01)\n"
     "      --max-spawn N (1000)\n"
     "      analysis rows: RUN/morse_analysis.csv\n";

@@ -47,7 +47,7 @@ typedef struct mgs_morse_options {
   int warmup;             /* W: first analysis (3000; seed 3000-5000); ADC alone before */
   int until;              /* last iteration with an analysis (15000, ADC's densify_until;
                              L_topo keeps applying the last pairing after it) */
-  int resolution;         /* r: voxels along the diagonal (128; seed 128-256) */
+  int resolution;         /* r: voxels along the diagonal (256; seed 128-256) */
   double tau;             /* the surface {A = τ} (0.5) */
   double eps_p;           /* ε_p / diagonal: densification threshold (0.01; 0.01-0.05) */
   double eps_sig;         /* ε_sig / diagonal: L_topo cutoff (0.02; 0.02-0.10) */

@@ -20,7 +20,7 @@ void mgs_morse_options_default(mgs_morse_options *o) {
   o->every = 500;
   o->warmup = 3000;
   o->until = 15000;
-  o->resolution = 128;
+  o->resolution = 256;
   o->tau = 0.5;
   o->eps_p = 0.01;
   o->eps_sig = 0.02;

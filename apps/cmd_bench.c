@@ -13,6 +13,7 @@ static const bench benches[] = {
   {"diagram", mgs_bench_diagram, "bottleneck/Wasserstein distances vs GUDHI"},
   {"topo", mgs_bench_topo, "narrow-band persistence time and memory vs dense peers"},
   {"scale", mgs_bench_scale, "city N=1,2,4: s/iteration, peak RSS, bytes/Gaussian, image-cache hits"},
+  {"mpi", mgs_bench_mpi, "K blocks on K MPI ranks vs one process: seam/interior PSNR, bytes, imbalance, weak scaling"},
 };
 
 int mgs_cmd_bench(int argc, char **argv) {

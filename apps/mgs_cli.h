@@ -24,6 +24,7 @@ int mgs_bench_vdb(int argc, char **argv);
 int mgs_bench_topo(int argc, char **argv);
 int mgs_bench_diagram(int argc, char **argv);
 int mgs_bench_scale(int argc, char **argv);
+int mgs_bench_mpi(int argc, char **argv);
 int mgs_cmd_train_mpi(int argc, char **argv); /* apps/cmd_train_mpi.c */
 
 /* Prints "morsegs <cmd>: <message>" to stderr and returns 1 (for `return mgs_cli_fail(...)`). */

@@ -18,6 +18,7 @@ extern "C" {
 typedef struct mgs_partition {
   int ranks;
   double tile;            /* tile side, world units */
+  double t0[3];           /* curve origin, in tiles (from the points' lower corner) */
   uint64_t *split;        /* ranks + 1 curve positions: rank r owns [split[r], split[r+1]) */
   double (*lo)[3], (*hi)[3]; /* per rank: box of its tiles that held points (empty: lo > hi) */
   size_t *count;          /* per rank: points owned at build time */

@@ -19,10 +19,16 @@ static uint64_t spread3(uint64_t x) {
   return x;
 }
 
-static uint64_t curve_pos(const float p[3], double inv) {
+/* Tile coordinates counted from t0 (a tile index per axis): the scene's tiles sit centred
+   in a power-of-two range of each axis, so the curve's cells are the scene's halves,
+   quarters, ... and an axis with few tiles (a city's height) only splits at the finest
+   levels. Counted from 0, the top-level cells met at the origin and the first split of a
+   scene around it was a plane through the origin (a city on z = 0 was cut along its
+   ground: every surface point on a block boundary; bench mpi found it). */
+static uint64_t curve_pos(const float p[3], double inv, const double t0[3]) {
   uint64_t c[3];
   for (int k = 0; k < 3; k++) {
-    double t = floor((double)p[k] * inv);
+    double t = floor((double)p[k] * inv) - t0[k];
     if (!(t >= -HALF)) t = -HALF; /* NaN too */
     if (t > HALF - 1) t = HALF - 1;
     c[k] = (uint64_t)((int64_t)t + HALF);
@@ -76,10 +82,15 @@ mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double til
   p->ranks = ranks;
   p->tile = tile;
   double inv = 1.0 / tile;
+  for (int k = 0; k < 3; k++) {
+    double a = floor(lo[k] * inv), nt = floor(hi[k] * inv) - a + 1, pow2 = 1;
+    while (pow2 < nt && pow2 < HALF) pow2 *= 2;
+    p->t0[k] = a - floor(0.5 * (pow2 - nt));
+  }
   size_t m = 0;
   for (size_t i = 0; i < n; i++) {
     const float *q = xyz + 3 * i;
-    if (isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2])) keys[m++] = curve_pos(q, inv);
+    if (isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2])) keys[m++] = curve_pos(q, inv, p->t0);
   }
   qsort(keys, m, sizeof *keys, cmp_u64);
   /* cut at the r/ranks quantiles, moved to the next tile boundary (a tile is never split) */
@@ -112,7 +123,7 @@ mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double til
 
 int mgs_partition_owner(const mgs_partition *p, const float xyz[3]) {
   if (!isfinite(xyz[0]) || !isfinite(xyz[1]) || !isfinite(xyz[2])) return 0;
-  uint64_t key = curve_pos(xyz, 1.0 / p->tile);
+  uint64_t key = curve_pos(xyz, 1.0 / p->tile, p->t0);
   /* the last r with split[r] <= key */
   int lo = 0, hi = p->ranks - 1;
   while (lo < hi) {
@@ -136,8 +147,8 @@ mgs_status mgs_partition_morton_order(const float *xyz, size_t n, double tile, u
   if (!(tile > 0) || !isfinite(tile)) return mgs_error_set(err, MGS_ERR_ARG, "partition: tile side %g", tile);
   keyed *k = malloc((n ? n : 1) * sizeof *k);
   if (!k) return mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu points", n);
-  double inv = 1.0 / tile;
-  for (size_t i = 0; i < n; i++) { k[i].key = curve_pos(xyz + 3 * i, inv); k[i].idx = (uint32_t)i; }
+  double inv = 1.0 / tile, t0[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; i++) { k[i].key = curve_pos(xyz + 3 * i, inv, t0); k[i].idx = (uint32_t)i; }
   qsort(k, n, sizeof *k, cmp_keyed);
   for (size_t i = 0; i < n; i++) perm[i] = k[i].idx;
   free(k);

@@ -136,7 +136,7 @@ void mgs_mpi_wait_all(MPI_Request *rq, int n, double limit, const char *what, in
 static int crash_rank = -1;
 static void on_crash(int sig) {
   char msg[96] = "morsegs train --mpi: rank ";
-  size_t n = strlen(msg);
+  size_t n = sizeof "morsegs train --mpi: rank " - 1;
   char num[16];
   int k = 0, v = crash_rank < 0 ? 0 : crash_rank;
   do { num[k++] = (char)('0' + v % 10); v /= 10; } while (v && k < 15);

@@ -245,6 +245,23 @@ static void test_merged_vdb(void) {
   mgs_diagram_destroy(b);
 }
 
+/* `morsegs bench mpi` end to end at a toy size: it runs, and its table has a row per model
+   with finite PSNRs and the gathered bytes (the figures themselves are the README's). */
+static void test_bench(void) {
+  char out[700], cmd[4096];
+  snprintf(out, sizeof out, "%s/bench", root);
+  snprintf(cmd, sizeof cmd, "MGS_THREADS=1 '%s' bench mpi --iters 10 --res 24 --size 1 --ranks 2 --no-weak --mpirun '%s' -o '%s' > '%s' 2>&1",
+           cli, mpirun, out, logp);
+  CHECK(system(cmd) == 0);
+  char md[800];
+  snprintf(md, sizeof md, "%s/mpi.md", out);
+  char *t = slurp(md);
+  CHECK_MSG(t && strstr(t, "| 2 | 2 blocks, merged | 10 |") && strstr(t, "| 1 | one process, same total steps | 20 |"), "mpi.md: %s",
+            t ? t : "(none)");
+  CHECK(t && !strstr(t, "| nan | nan |"));
+  free(t);
+}
+
 int main(int argc, char **argv) {
   cli = getenv("MGS_CLI");
   mpirun = argc > 1 ? argv[1] : "mpirun";
@@ -267,6 +284,7 @@ int main(int argc, char **argv) {
   RUN(test_lost_rank);
   RUN(test_resume);
   RUN(test_merged_vdb);
+  RUN(test_bench);
   mgs_remove_tree(root, &err);
   return mgs_test_finish();
 }

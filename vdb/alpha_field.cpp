@@ -19,12 +19,28 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <unordered_map>
 #include <vector>
 #include "core/mgs_log.h"
 #include "core/mgs_math.h"
 #include "vdb/vdb_internal.hpp"
 
 using namespace openvdb;
+
+// The last build's leaves by key, for mgs_vdb_alpha_field_cached: a leaf whose Gaussians'
+// prepared parameters (in index order) hash as before, at the same voxel size, lattice and
+// support, is copied instead of recomputed.
+struct mgs_vdb_alpha_cache {
+  struct Leaf {
+    uint64_t hash;
+    float v[512];
+    uint64_t mask[8];
+  };
+  double h = 0, shift[3] = {0, 0, 0};
+  double k_sigma = 0;
+  int small = -1;
+  std::unordered_map<uint64_t, Leaf> leaves;
+};
 
 namespace {
 
@@ -59,6 +75,20 @@ inline Coord key_origin(uint64_t key) {
                (int32_t)((int64_t)(key & mask) - kLeafBias) * 8);
 }
 
+uint64_t fnv(uint64_t h, const void *p, size_t n) {
+  const unsigned char *b = static_cast<const unsigned char *>(p);
+  for (size_t i = 0; i < n; i++) { h ^= b[i]; h *= 1099511628211ull; }
+  return h;
+}
+
+uint64_t hash_prepared(uint64_t h, const Prepared &g) {
+  h = fnv(h, g.c, sizeof g.c);
+  h = fnv(h, g.m, sizeof g.m);
+  h = fnv(h, &g.amp, sizeof g.amp);
+  h = fnv(h, g.lo, sizeof g.lo);
+  return fnv(h, g.hi, sizeof g.hi);
+}
+
 double physical_memory() {
   long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && size > 0 ? (double)pages * (double)size : 8.0 * (1ull << 30);
@@ -85,7 +115,7 @@ struct Source {
 };
 
 mgs_status build(const Source &src, const mgs_vdb_alpha_params *pin, mgs_vdb_grid **out,
-                 mgs_vdb_build_info *info_out, mgs_error *err) {
+                 mgs_vdb_build_info *info_out, mgs_error *err, mgs_vdb_alpha_cache *cache = nullptr) {
   *out = nullptr;
   const double t0 = mgs_now();
   mgs_vdb_alpha_params p;
@@ -247,6 +277,10 @@ mgs_status build(const Source &src, const mgs_vdb_alpha_params *pin, mgs_vdb_gri
   using LeafT = FloatTree::LeafNodeType;
   std::vector<LeafT *> leaves(nleaf, nullptr);
   std::atomic<bool> nomem{false};
+  const bool reuse = cache && cache->h == h && cache->k_sigma == p.k_sigma && cache->small == (int)p.small &&
+                     cache->shift[0] == shift[0] && cache->shift[1] == shift[1] && cache->shift[2] == shift[2];
+  std::vector<uint64_t> hashes(cache ? nleaf : 0);
+  std::atomic<size_t> reused{0};
   mgs_vdb_detail::parallel_for(0, nleaf, 8, [&](size_t b, size_t e) {
     for (size_t L = b; L < e; L++) {
       const Coord o = key_origin(pairs[runs[L]].key);
@@ -254,6 +288,21 @@ mgs_status build(const Source &src, const mgs_vdb_alpha_params *pin, mgs_vdb_gri
       if (!leaf) { nomem = true; continue; }
       float *buf = leaf->buffer().data();
       auto &mask = leaf->getValueMask();
+      if (cache) {
+        uint64_t hh = 1469598103934665603ull;
+        for (size_t r = runs[L]; r < runs[L + 1]; r++) hh = hash_prepared(hh, prep[pairs[r].idx]);
+        hashes[L] = hh;
+        if (reuse) {
+          auto it = cache->leaves.find(pairs[runs[L]].key);
+          if (it != cache->leaves.end() && it->second.hash == hh) {
+            std::memcpy(buf, it->second.v, sizeof it->second.v);
+            for (int w = 0; w < 8; w++) mask.template getWord<uint64_t>(w) = it->second.mask[w];
+            reused++;
+            leaves[L] = leaf;
+            continue;
+          }
+        }
+      }
       for (size_t r = runs[L]; r < runs[L + 1]; r++) {
         const Prepared &g = prep[pairs[r].idx];
         const int32_t x0 = std::max(g.lo[0], o[0]), x1 = std::min(g.hi[0], o[0] + 7);
@@ -303,11 +352,27 @@ mgs_status build(const Source &src, const mgs_vdb_alpha_params *pin, mgs_vdb_gri
     grid->setGridClass(GRID_FOG_VOLUME);
     auto &tree = grid->tree();
     size_t i = 0;
+    std::unordered_map<uint64_t, mgs_vdb_alpha_cache::Leaf> next;
+    if (cache) next.reserve(nleaf);
     for (; i < nleaf; i++) {
       if (leaves[i]->isEmpty()) { delete leaves[i]; leaves[i] = nullptr; continue; }  // no voxel inside an ellipsoid
+      if (cache) {
+        mgs_vdb_alpha_cache::Leaf &c = next[leaf_key(leaves[i]->origin()[0] >> 3, leaves[i]->origin()[1] >> 3, leaves[i]->origin()[2] >> 3)];
+        c.hash = hashes[i];
+        std::memcpy(c.v, leaves[i]->buffer().data(), sizeof c.v);
+        for (int w = 0; w < 8; w++) c.mask[w] = leaves[i]->getValueMask().getWord<uint64_t>(w);
+      }
       tree.addLeaf(leaves[i]);
       leaves[i] = nullptr;
     }
+    if (cache) {
+      cache->leaves.swap(next);
+      cache->h = h;
+      cache->k_sigma = p.k_sigma;
+      cache->small = (int)p.small;
+      for (int a = 0; a < 3; a++) cache->shift[a] = shift[a];
+    }
+    info.leaves_reused = reused;
   } catch (const std::exception &e) {
     for (auto *l : leaves) delete l;
     return mgs_error_set(err, MGS_ERR_NOMEM, "alpha field: %s", e.what());
@@ -441,6 +506,26 @@ extern "C" mgs_status mgs_vdb_alpha_field(const mgs_gaussians *g, const mgs_vdb_
   try {
     return build(s, p, out, info, err);
   } catch (const std::exception &e) {
+    return mgs_error_set(err, MGS_ERR_NOMEM, "alpha field: %s", e.what());
+  }
+}
+
+extern "C" mgs_vdb_alpha_cache *mgs_vdb_alpha_cache_create(void) { return new (std::nothrow) mgs_vdb_alpha_cache(); }
+extern "C" void mgs_vdb_alpha_cache_destroy(mgs_vdb_alpha_cache *c) { delete c; }
+
+extern "C" mgs_status mgs_vdb_alpha_field_cached(const mgs_gaussians *g, const mgs_vdb_alpha_params *p,
+                                                 mgs_vdb_alpha_cache *cache, mgs_vdb_grid **out, mgs_vdb_build_info *info,
+                                                 mgs_error *err) {
+  *out = nullptr;
+  if (!cache) return mgs_error_set(err, MGS_ERR_ARG, "alpha field: no cache");
+  mgs_status st = mgs_vdb_check_gaussians(g, "alpha field", err);
+  if (st != MGS_OK) return st;
+  Source s{g->n, get_model, g, g->mean};
+  try {
+    return build(s, p, out, info, err, cache);
+  } catch (const std::exception &e) {
+    cache->leaves.clear();
+    cache->h = 0;
     return mgs_error_set(err, MGS_ERR_NOMEM, "alpha field: %s", e.what());
   }
 }

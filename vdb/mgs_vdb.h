@@ -110,6 +110,7 @@ typedef struct mgs_vdb_build_info {
   double dense_voxels;              /* voxels of the dense box that holds the same field */
   double estimated_bytes;           /* the estimate checked against the budget */
   double seconds;
+  size_t leaves_reused;             /* copied from a cache (mgs_vdb_alpha_field_cached) */
 } mgs_vdb_build_info;
 
 /* Rejects (MGS_ERR_NUMERIC / MGS_ERR_FORMAT, naming `source` and the Gaussian index) NaN/Inf
@@ -125,6 +126,16 @@ mgs_status mgs_vdb_alpha_field(const mgs_gaussians *g, const mgs_vdb_alpha_param
 mgs_status mgs_vdb_alpha_field_cov(size_t n, const float *mean, const float *cov,
                                    const float *alpha, const mgs_vdb_alpha_params *p,
                                    mgs_vdb_grid **out, mgs_vdb_build_info *info, mgs_error *err);
+/* Incremental builds: a cache of the last build's leaves. A leaf whose Gaussians (their
+ * prepared parameters, in index order) are those of the cached build, at the same voxel
+ * size, lattice (the grid translation follows the means' box centre) and support, is
+ * copied; the others are computed. The result is bit-identical to mgs_vdb_alpha_field's
+ * (tested). Give an absolute voxel_size so that moving Gaussians do not change it. */
+typedef struct mgs_vdb_alpha_cache mgs_vdb_alpha_cache;
+mgs_vdb_alpha_cache *mgs_vdb_alpha_cache_create(void);
+void mgs_vdb_alpha_cache_destroy(mgs_vdb_alpha_cache *c);
+mgs_status mgs_vdb_alpha_field_cached(const mgs_gaussians *g, const mgs_vdb_alpha_params *p, mgs_vdb_alpha_cache *cache,
+                                      mgs_vdb_grid **out, mgs_vdb_build_info *info, mgs_error *err);
 /* The voxel size p would give for these means (resolution over the bbox diagonal). */
 double mgs_vdb_voxel_size_for(size_t n, const float *mean, const mgs_vdb_alpha_params *p);
 

@@ -1,8 +1,9 @@
 /* morsegs bench mpi: what splitting a scene into blocks costs (issue 12, item 9). The
- * builtin city trained by `mpirun -np K morsegs train --mpi` (K blocks, independent until
- * the merge; city 2 by default) and by one process at the same total number of steps (K x
- * iterations); both
- * models rendered on the test views. Pixels are split by where they land: "seam" when the
+ * builtin city (city 2 by default) trained by `mpirun -np K morsegs train --mpi` twice, with
+ * densification until half the iterations: blocks independent until the merge
+ * (--independent), and blocks that hand off at the end of densification and exchange
+ * read-only ghosts every E steps; and by one process at the same total number of steps (K x
+ * iterations). All models rendered on the test views. Pixels are split by where they land: "seam" when the
  * expected surface point's tile touches (26-neighbourhood) an occupied tile of another
  * block, "interior" otherwise, background left out.
  * Reports PSNR on each set for both models, bytes gathered, load imbalance (max / mean
@@ -178,9 +179,9 @@ static mgs_status make_city(const char *dir, int size, int res, mgs_error *err) 
 int mgs_bench_mpi(int argc, char **argv) {
   static const struct option opts[] = {{"ranks", required_argument, 0, 'k'}, {"iters", required_argument, 0, 'i'},
                                        {"res", required_argument, 0, 'r'},   {"mpirun", required_argument, 0, 'm'},
-                                       {"output", required_argument, 0, 'o'}, {"no-weak", no_argument, 0, 'w'}, {"size", required_argument, 0, 's'},
+                                       {"output", required_argument, 0, 'o'}, {"no-weak", no_argument, 0, 'w'}, {"size", required_argument, 0, 's'}, {"exchange-every", required_argument, 0, 'e'},
                                        {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
-  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2;
+  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2, every = 10;
   const char *mpirun = "mpirun", *outdir = NULL;
   optind = 1;
   int c;
@@ -203,10 +204,12 @@ int mgs_bench_mpi(int argc, char **argv) {
       case 'm': mpirun = optarg; break;
       case 'o': outdir = optarg; break;
       case 'w': weak = 0; break;
+      case 'e': every = atoi(optarg); if (every < 1) { fprintf(stderr, "morsegs bench mpi: --exchange-every must be >= 1\n"); return 2; } break;
       case 's': size = atoi(optarg); if (size < 1 || size > 8) { fprintf(stderr, "morsegs bench mpi: --size must be 1..8\n"); return 2; } break;
       case 'h':
-        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
-               "  K blocks on K ranks against one process at K x N steps: seam / interior PSNR, bytes gathered,\n"
+        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--exchange-every E (10)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
+               "  K blocks on K ranks (independent; ghosts exchanged every E steps after densification, which\n"
+               "  ends at N/2) against one process at K x N steps: seam / interior PSNR, bytes gathered and exchanged,\n"
                "  load imbalance; weak scaling city 1 on 1 rank vs city 2 on 4 ranks. Writes DIR/mpi.md, mpi.csv.\n");
         return 0;
       default: return 2;
@@ -239,59 +242,71 @@ int mgs_bench_mpi(int argc, char **argv) {
   size_t ml = 0;
   char csv[16384];
   size_t cl = 0;
-  cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "ranks,model,steps_per_rank,psnr_seam,psnr_interior,seam_pixels,pixels,wall_s,bytes_gathered,load_imbalance\n");
+  cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "ranks,model,steps_per_rank,psnr_seam,psnr_interior,seam_pixels,pixels,wall_s,bytes_gathered,bytes_exchanged_per_step,load_imbalance\n");
   ml += (size_t)snprintf(md + ml, sizeof md - ml,
-                         "# morsegs bench mpi\n\ncity %d (%d² views, %zu train / %zu test), %d iterations per rank, one thread per rank, `%s`.\n\n"
-                         "| ranks | model | steps per rank | PSNR seam | PSNR interior | seam share of pixels | wall s | bytes gathered | load imbalance |\n"
-                         "|---|---|---|---|---|---|---|---|---|\n",
+                         "# morsegs bench mpi\n\ncity %d (%d² views, %zu train / %zu test), %d iterations per rank, densification until half of them, one thread per rank, `%s`.\n\n"
+                         "| ranks | model | steps per rank | PSNR seam | PSNR interior | seam share of pixels | wall s | bytes gathered | bytes exchanged per step | load imbalance |\n"
+                         "|---|---|---|---|---|---|---|---|---|---|\n",
                          size, res, ds->n_views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TEST], iters, mpirun);
   int rc = 0;
   for (int q = 0; q < nk && !rc; q++) {
-    int K = ks[q];
-    char rb[4400], rs[4400];
-    snprintf(rb, sizeof rb, "%s/np%d", base, K);
+    int K = ks[q], half = iters / 2;
+    char rb[2][4400], rs[4400];
+    double wall_b[2];
+    /* [0] independent blocks, [1] ghosts exchanged after the hand-off at `half` */
+    for (int x = 0; x < 2 && !rc; x++) {
+      snprintf(rb[x], sizeof rb[x], "%s/np%d%s", base, K, x ? "_ghosts" : "");
+      char extra[96];
+      if (x) snprintf(extra, sizeof extra, "--exchange-every %d", every);
+      else snprintf(extra, sizeof extra, "--independent");
+      snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np %d '%s' train --mpi '%s' -o '%s' --iters %d --densify-until %d %s --seed 1 "
+               "--quiet --force > '%s.log' 2>&1", mpirun, K, self, city, rb[x], iters, half, extra, rb[x]);
+      double t0 = mgs_now();
+      if (run(cmd)) { fprintf(stderr, "morsegs bench mpi: -np %d failed (see %s.log)\n", K, rb[x]); rc = 1; }
+      wall_b[x] = mgs_now() - t0;
+    }
+    if (rc) break;
     snprintf(rs, sizeof rs, "%s/serial%d", base, K);
-    snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np %d '%s' train --mpi '%s' -o '%s' --iters %d --seed 1 --quiet --force > '%s.log' 2>&1",
-             mpirun, K, self, city, rb, iters, rb);
+    snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s' --iters %d --densify-until %d --seed 1 --quiet --force --checkpoint-every 0 > '%s.log' 2>&1",
+             self, city, rs, K * iters, K * half, rs);
     double t0 = mgs_now();
-    if (run(cmd)) { fprintf(stderr, "morsegs bench mpi: -np %d failed (see %s.log)\n", K, rb); rc = 1; break; }
-    double wall_b = mgs_now() - t0;
-    snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s' --iters %d --seed 1 --quiet --force --checkpoint-every 0 > '%s.log' 2>&1",
-             self, city, rs, K * iters, rs);
-    t0 = mgs_now();
     if (run(cmd)) { fprintf(stderr, "morsegs bench mpi: the single-process run failed (see %s.log)\n", rs); rc = 1; break; }
     double wall_s = mgs_now() - t0;
     mgs_partition *part = NULL;
     if (mgs_partition_build(ds->init_points->xyz, ds->init_points->n, K, 0, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
-    char pb[4600], ps[4600];
-    snprintf(pb, sizeof pb, "%s/point_cloud/iteration_%d/point_cloud.ply", rb, iters);
+    char pb[2][9000], ps[4600];
+    for (int x = 0; x < 2; x++) snprintf(pb[x], sizeof pb[x], "%s/point_cloud/iteration_%d/point_cloud.ply", rb[x], iters);
     snprintf(ps, sizeof ps, "%s/point_cloud/iteration_%d/point_cloud.ply", rs, K * iters);
-    psnr_acc ab, as;
+    psnr_acc ab[2], as;
     size_t sn = 0, sd = 0;
     tile_map tm = {0};
     if (!tile_map_build(part, ds->init_points, &tm)) { free(tm.key); free(tm.owner); mgs_partition_destroy(part); fprintf(stderr, "morsegs bench mpi: out of memory\n"); rc = 1; break; }
-    mgs_status es = eval_model(ds, pb, part, &tm, &ab, &sn, &sd, &err);
+    mgs_status es = eval_model(ds, pb[0], part, &tm, &ab[0], &sn, &sd, &err);
+    if (!es) es = eval_model(ds, pb[1], part, &tm, &ab[1], NULL, NULL, &err);
     if (!es) es = eval_model(ds, ps, part, &tm, &as, NULL, NULL, &err);
     free(tm.key); free(tm.owner);
-    if (es) {
-      mgs_partition_destroy(part);
-      rc = mgs_cli_fail("bench mpi", &err);
-      break;
-    }
     mgs_partition_destroy(part);
-    cJSON *st = read_json(rb, "mpi_stats.json");
-    double bytes = st ? jnum(st, "bytes_gathered") : NAN, imb = st ? jnum(st, "load_imbalance") : NAN;
-    cJSON_Delete(st);
-    ml += (size_t)snprintf(md + ml, sizeof md - ml, "| %d | %d blocks, merged | %d | %.2f | %.2f | %.1f %% | %.1f | %.0f | %.2f |\n", K, K,
-                           iters, psnr_of(&ab, 0), psnr_of(&ab, 1), sd ? 100.0 * sn / sd : 0.0, wall_b, bytes, imb);
-    ml += (size_t)snprintf(md + ml, sizeof md - ml, "| 1 | one process, same total steps | %d | %.2f | %.2f | (same pixel split) | %.1f | – | – |\n",
+    if (es) { rc = mgs_cli_fail("bench mpi", &err); break; }
+    for (int x = 0; x < 2; x++) {
+      cJSON *st = read_json(rb[x], "mpi_stats.json");
+      double bytes = st ? jnum(st, "bytes_gathered") : NAN, imb = st ? jnum(st, "load_imbalance") : NAN;
+      double xps = st && x ? jnum(st, "bytes_exchanged_per_step") : 0;
+      cJSON_Delete(st);
+      char model[96];
+      if (x) snprintf(model, sizeof model, "%d blocks, ghosts every %d steps", K, every);
+      else snprintf(model, sizeof model, "%d blocks, independent", K);
+      ml += (size_t)snprintf(md + ml, sizeof md - ml, "| %d | %s | %d | %.2f | %.2f | %.1f %% | %.1f | %.0f | %.0f | %.2f |\n", K, model,
+                             iters, psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sd ? 100.0 * sn / sd : 0.0, wall_b[x], bytes, xps, imb);
+      cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,%s,%d,%.4f,%.4f,%zu,%zu,%.2f,%.0f,%.0f,%.3f\n", K, x ? "blocks_ghosts" : "blocks", iters,
+                             psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sn, sd, wall_b[x], bytes, xps, imb);
+      printf("-np %d %s: seam %.2f / interior %.2f dB, seam pixels %.1f %%, %.0f bytes gathered, %.0f bytes exchanged per step, imbalance %.2f\n",
+             K, x ? "ghosts" : "independent", psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sd ? 100.0 * sn / sd : 0.0, bytes, xps, imb);
+    }
+    ml += (size_t)snprintf(md + ml, sizeof md - ml, "| 1 | one process, same total steps | %d | %.2f | %.2f | (same pixel split) | %.1f | – | – | – |\n",
                            K * iters, psnr_of(&as, 0), psnr_of(&as, 1), wall_s);
-    cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,blocks,%d,%.4f,%.4f,%zu,%zu,%.2f,%.0f,%.3f\n", K, iters, psnr_of(&ab, 0),
-                           psnr_of(&ab, 1), sn, sd, wall_b, bytes, imb);
-    cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,single,%d,%.4f,%.4f,%zu,%zu,%.2f,,\n", K, K * iters, psnr_of(&as, 0),
+    cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,single,%d,%.4f,%.4f,%zu,%zu,%.2f,,,\n", K, K * iters, psnr_of(&as, 0),
                            psnr_of(&as, 1), sn, sd, wall_s);
-    printf("-np %d: seam %.2f / interior %.2f dB (one process at %d steps: %.2f / %.2f dB), seam pixels %.1f %%, %.0f bytes gathered, imbalance %.2f\n",
-           K, psnr_of(&ab, 0), psnr_of(&ab, 1), K * iters, psnr_of(&as, 0), psnr_of(&as, 1), sd ? 100.0 * sn / sd : 0.0, bytes, imb);
+    printf("-np %d: one process at %d steps: seam %.2f / interior %.2f dB\n", K, K * iters, psnr_of(&as, 0), psnr_of(&as, 1));
     fflush(stdout);
   }
   mgs_dataset_destroy(ds);
@@ -303,17 +318,17 @@ int mgs_bench_mpi(int argc, char **argv) {
     if (make_city(city1, 1, res, &err) || make_city(city2, 2, res, &err)) return mgs_cli_fail("bench mpi", &err);
     snprintf(r1, sizeof r1, "%s/weak1", base);
     snprintf(r4, sizeof r4, "%s/weak4", base);
-    snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s' --iters %d --seed 1 --quiet --force --checkpoint-every 0 > '%s.log' 2>&1", self, city1,
-             r1, iters, r1);
+    snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s' --iters %d --densify-until %d --seed 1 --quiet --force --checkpoint-every 0 > '%s.log' 2>&1",
+             self, city1, r1, iters, iters / 2, r1);
     int ok = run(cmd) == 0;
-    snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np 4 '%s' train --mpi '%s' -o '%s' --iters %d --seed 1 --quiet --force > '%s.log' 2>&1",
-             mpirun, self, city2, r4, iters, r4);
+    snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np 4 '%s' train --mpi '%s' -o '%s' --iters %d --densify-until %d --exchange-every %d "
+             "--seed 1 --quiet --force > '%s.log' 2>&1", mpirun, self, city2, r4, iters, iters / 2, every, r4);
     ok = ok && run(cmd) == 0;
     cJSON *a = ok ? read_json(r1, "train_stats.json") : NULL, *b = ok ? read_json(r4, "mpi_stats.json") : NULL;
     double t1 = a ? jnum(a, "train_seconds") : NAN, t4 = b ? jnum(b, "train_seconds_max") : NAN;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     ml += (size_t)snprintf(md + ml, sizeof md - ml,
-                           "\nWeak scaling (city 1 on 1 rank, city 2 = 4× the content on 4 ranks, %d iterations each): rank training "
+                           "\nWeak scaling (city 1 on 1 rank, city 2 = 4× the content on 4 ranks with ghosts exchanged, %d iterations each): rank training "
                            "time %.1f s vs %.1f s (max over ranks), ratio %.2f; this machine has %ld cores, so with 4 ranks each "
                            "rank had %.2f of a core (the ratio normalized by that: %.2f).\n",
                            iters, t1, t4, t4 / t1, cores, cores >= 4 ? 1.0 : cores / 4.0, cores >= 4 ? t4 / t1 : t4 / t1 * cores / 4.0);

@@ -96,7 +96,9 @@ static void usage(FILE *f) {
     "                          (with --mpi: --ghost-margin TILES (1), --mpi-timeout S: how long rank 0 waits\n"
     "                          for the other blocks after its own (600 + 2x its training time);\n"
     "                          --checkpoint-every, --resume and --force per rank: RUN/ranks/rank_K.mgsckpt;\n"
-    "                          --vdb-resolution R: the merged point_cloud.vdb, built by blocks)\n"
+    "                          --vdb-resolution R: the merged point_cloud.vdb, built by blocks;\n"
+    "                          --densify-until N: hand-off there, then read-only ghosts refreshed every\n"
+    "                          --exchange-every K steps (100); --independent: no hand-off)\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

@@ -1,16 +1,19 @@
 /* `morsegs train --mpi DATA -o RUN [options]` under `mpirun -np K` (Open MPI): the scene's
  * initial points are cut into K compact blocks along a Morton curve of tiles
  * (train/mgs_partition.h); each rank trains its block plus ghost copies of the points
- * within a margin of it, on the training views that see it, and rank 0 merges the
- * Gaussians each rank owns (mean inside its block) into one model (point-to-point, so
- * a rank whose block never comes is named and the run ended: --mpi-timeout). One
- * process (-np 1) runs the serial trainer unchanged: the same model as `morsegs train`.
+ * within a margin of it, on the training views that see it, on its own until densification
+ * ends (--densify-until). There it hands off (apps/train_mpi_ghosts.c): each rank keeps the
+ * Gaussians its block holds and receives read-only ghosts of its neighbours' Gaussians
+ * whose support reaches it, refreshed by their owners every --exchange-every steps through
+ * MPI neighbourhood collectives (--independent: no hand-off, blocks independent to the
+ * end). Rank 0 merges the Gaussians each rank owns into one model (point-to-point, so a
+ * rank whose block never comes is named and the run ended: --mpi-timeout). One process
+ * (-np 1) runs the serial trainer unchanged: the same model as `morsegs train`.
  *
- * This is the first slice of distributed training. Not done yet: ghosts are trained
- * locally rather than read-only and are never exchanged with their owners during
- * training (blocks are independent until the merge), no migration of Gaussians across
- * blocks (a Gaussian that moves out of its block is merged by its final position, so the
- * union stays a partition), costs split by Gaussians only (not pixels).
+ * Not done: Gaussians are not migrated (at the hand-off the copies a rank trained of a
+ * neighbour's region are dropped, the owner's kept; after it a Gaussian that drifts out of
+ * its block stays with its owner), ghosts are averaged with nothing (owner-computes, no
+ * ADMM consensus), costs are split by Gaussians only (not pixels).
  * Each rank checkpoints its block (RUN/ranks/rank_K.mgsckpt); --resume continues every
  * rank. A failing rank ends the whole run (MPI_Abort) with its message; a rank that dies
  * is named by mpirun, which ends the others. */
@@ -48,6 +51,7 @@ typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
   int checkpoint_every, resume, force;
+  int densify_until, exchange_every, independent;
   int vdb_resolution; /* > 0: the merged model's .vdb, built by blocks */
   double margin;  /* ghost margin in tiles */
   double timeout; /* seconds rank 0 waits for the other blocks after its own (<0: automatic) */
@@ -58,6 +62,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
   memset(o, 0, sizeof *o);
   o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1; o->timeout = -1;
   o->checkpoint_every = 1000;
+  o->densify_until = -1; o->exchange_every = 100;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     char *end = NULL;
@@ -78,10 +83,13 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--resume")) o->resume = 1;
     else if (!strcmp(a, "--vdb-resolution")) { if (!v) goto need; o->vdb_resolution = (int)strtol(v, &end, 10); i++; if (*end || o->vdb_resolution < 8 || o->vdb_resolution > 100000) goto bad; }
     else if (!strcmp(a, "--force")) o->force = 1;
+    else if (!strcmp(a, "--independent")) o->independent = 1;
+    else if (!strcmp(a, "--densify-until")) { if (!v) goto need; o->densify_until = (int)strtol(v, &end, 10); i++; if (*end || o->densify_until < 1) goto bad; }
+    else if (!strcmp(a, "--exchange-every")) { if (!v) goto need; o->exchange_every = (int)strtol(v, &end, 10); i++; if (*end || o->exchange_every < 0) goto bad; }
     else if (!strcmp(a, "--checkpoint-every")) { if (!v) goto need; o->checkpoint_every = (int)strtol(v, &end, 10); i++; if (*end || o->checkpoint_every < 0) goto bad; }
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --densify-until, --exchange-every, --independent, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -245,6 +253,20 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   o.checkpoint_every = mo->checkpoint_every;
   o.checkpoint_path = ckpt;
   o.adc.white_background = mo->white;
+  if (mo->densify_until > 0) o.adc.densify_until = mo->densify_until;
+  /* after densification: ownership by position and read-only ghosts kept up to date */
+  mgs_mpi_ghosts *gh = NULL;
+  int handoff = o.adc.densify_until;
+  if (!mo->independent && handoff < mo->iters) {
+    char gname[64];
+    snprintf(gname, sizeof gname, "ranks/rank_%d.ghosts", rank);
+    char *side = mgs_path_join(mo->run, gname);
+    gh = side ? mgs_mpi_ghosts_create(part, rank, size, handoff, mo->exchange_every, m, side) : NULL;
+    free(side);
+    if (!gh) mgs_mpi_die(rank, "out of memory");
+    o.after_step = mgs_mpi_ghosts_after_step;
+    o.after_step_user = gh;
+  }
   mgs_trainer *t = NULL;
   if (mgs_trainer_create(&sub, &o, g0, mo->strategy_adc ? mgs_strategy_adc_create(&o.adc) : NULL, &t, &err)) mgs_mpi_die(rank, err.msg);
   if (!mo->quiet)
@@ -257,6 +279,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       mgs_mpi_die(rank, m2);
     }
     if (mgs_trainer_load_checkpoint(t, ckpt, &err)) mgs_mpi_die(rank, err.msg);
+    if (gh && mgs_mpi_ghosts_resume(gh, t, &err)) mgs_mpi_die(rank, err.msg);
     fprintf(stderr, "morsegs train --mpi: rank %d: resumed from %s at iteration %d\n", rank, ckpt, mgs_trainer_iteration(t));
   } else if (mo->checkpoint_every > 0 && mgs_trainer_save_checkpoint(t, ckpt, &err)) {
     mgs_mpi_die(rank, err.msg); /* from here on a run killed at any moment can --resume */
@@ -274,7 +297,13 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   size_t n_keep = 0;
   uint8_t *keep = malloc(g->n ? g->n : 1);
   if (!keep) mgs_mpi_die(rank, "out of memory");
-  for (size_t i = 0; i < g->n; i++) n_keep += keep[i] = (uint8_t)(mgs_partition_owner(part, g->mean + 3 * i) == rank);
+  /* after the hand-off the owned rows are fixed (a Gaussian that drifted out of its block
+     since stays with its owner); before it, ownership is by position */
+  int handed = mgs_mpi_ghosts_active(gh);
+  double lag = 0;
+  if (handed && mgs_mpi_ghosts_lag(gh, t, &lag, &err)) mgs_mpi_die(rank, err.msg);
+  for (size_t i = 0; i < g->n; i++)
+    n_keep += keep[i] = handed ? (uint8_t)(i < mgs_mpi_ghosts_owned(gh)) : (uint8_t)(mgs_partition_owner(part, g->mean + 3 * i) == rank);
   int dims = 0;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) dims += mgs_param_dim((mgs_param_group)k);
   float *pack = malloc((n_keep ? n_keep : 1) * (size_t)dims * sizeof(float));
@@ -293,14 +322,16 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
      when its message does not come (a collective would only hang) */
   int cnt = (int)(n_keep * (size_t)dims);
   double loss = mgs_trainer_last_loss(t);
-  double head[7] = {(double)cnt, loss, train_s, (double)n_owned, (double)(n_local - n_owned), (double)kept, (double)n_keep};
+  enum { NHEAD = 10, NROW = 6 };
+  double head[NHEAD] = {(double)cnt, loss, train_s, (double)n_owned, (double)(n_local - n_owned), (double)kept, (double)n_keep,
+                        handed ? (double)mgs_mpi_ghosts_count(gh) : 0.0, (double)mgs_mpi_ghosts_bytes(gh), lag};
   int *counts = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL, *displs = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL;
-  double *heads = rank == 0 ? calloc((size_t)size * 7, sizeof(double)) : NULL;
+  double *heads = rank == 0 ? calloc((size_t)size * NHEAD, sizeof(double)) : NULL;
   float *all = NULL;
   long long total = 0;
   if (rank != 0) {
     MPI_Request rq[2];
-    MPI_Isend(head, 7, MPI_DOUBLE, 0, TAG_HEAD, MPI_COMM_WORLD, &rq[0]);
+    MPI_Isend(head, NHEAD, MPI_DOUBLE, 0, TAG_HEAD, MPI_COMM_WORLD, &rq[0]);
     MPI_Isend(pack, cnt, MPI_FLOAT, 0, TAG_BLOCK, MPI_COMM_WORLD, &rq[1]);
     MPI_Waitall(2, rq, MPI_STATUSES_IGNORE); /* rank 0 gone: mpirun ends this rank */
   } else {
@@ -310,10 +341,10 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     MPI_Request *rq = malloc((size_t)size * sizeof *rq);
     if (!rq) mgs_mpi_die(rank, "out of memory");
     rq[0] = MPI_REQUEST_NULL;
-    for (int r = 1; r < size; r++) MPI_Irecv(heads + 7 * r, 7, MPI_DOUBLE, r, TAG_HEAD, MPI_COMM_WORLD, &rq[r]);
+    for (int r = 1; r < size; r++) MPI_Irecv(heads + NHEAD * r, NHEAD, MPI_DOUBLE, r, TAG_HEAD, MPI_COMM_WORLD, &rq[r]);
     mgs_mpi_wait_all(rq, size, limit, "block summary", mo->timeout > 0);
     for (int r = 0; r < size; r++) {
-      counts[r] = (int)heads[7 * r];
+      counts[r] = (int)heads[NHEAD * r];
       displs[r] = (int)total;
       total += counts[r];
     }
@@ -328,15 +359,20 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   free(pack);
   /* scalars: loss mean, time balance (from the summaries) */
   double loss_sum = 0, tmax = 0, tsum = 0;
-  unsigned long long *rows = rank == 0 ? calloc((size_t)size * 4, sizeof *rows) : NULL;
+  unsigned long long *rows = rank == 0 ? calloc((size_t)size * NROW, sizeof *rows) : NULL;
   if (rank == 0) {
     if (!rows) mgs_mpi_die(rank, "out of memory");
     for (int r = 0; r < size; r++) {
-      loss_sum += heads[7 * r + 1];
-      tmax = fmax(tmax, heads[7 * r + 2]);
-      tsum += heads[7 * r + 2];
-      for (int k = 0; k < 4; k++) rows[4 * r + k] = (unsigned long long)heads[7 * r + 3 + k];
+      loss_sum += heads[NHEAD * r + 1];
+      tmax = fmax(tmax, heads[NHEAD * r + 2]);
+      tsum += heads[NHEAD * r + 2];
+      for (int k = 0; k < NROW; k++) rows[NROW * r + k] = (unsigned long long)heads[NHEAD * r + 3 + k];
     }
+  }
+  double *heads_lag = rank == 0 ? calloc((size_t)size, sizeof(double)) : NULL;
+  if (rank == 0) {
+    if (!heads_lag) mgs_mpi_die(rank, "out of memory");
+    for (int r = 0; r < size; r++) heads_lag[r] = heads[NHEAD * r + 9];
   }
   free(heads);
   int rc = 0;
@@ -383,16 +419,24 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!st) {
       /* per-rank figures */
       char *path = mgs_path_join(mo->run, "mpi_stats.json");
-      size_t cap = 512 + (size_t)size * 160, len = 0;
+      size_t cap = 768 + (size_t)size * 224, len = 0;
       char *text = malloc(cap);
       if (!path || !text) mgs_mpi_die(rank, "out of memory");
-      len += (size_t)snprintf(text + len, cap - len, "{\n  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
+      unsigned long long xbytes = 0;
+      double lag_max = 0;
+      for (int r = 0; r < size; r++) { xbytes += rows[NROW * r + 5]; lag_max = fmax(lag_max, heads_lag[r]); }
+      int steps_after = handed ? mo->iters - handoff : 0;
+      len += (size_t)snprintf(text + len, cap - len, "{\n  \"handoff\": %d,\n  \"exchange_every\": %d,\n  \"bytes_exchanged\": %llu,\n"
+                              "  \"bytes_exchanged_per_step\": %.1f,\n  \"ghost_lag_max\": %.9g,\n", handed ? handoff : -1,
+                              handed ? mo->exchange_every : 0, xbytes, steps_after > 0 ? (double)xbytes / steps_after : 0.0, lag_max);
+      len += (size_t)snprintf(text + len, cap - len, "  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
                               "  \"train_seconds_max\": %.3f,\n  \"load_imbalance\": %.3f,\n  \"bytes_gathered\": %lld,\n"
                               "  \"seconds\": %.3f,\n  \"per_rank\": [\n", size, n_all, loss_sum / size, tmax,
                               tsum > 0 ? tmax / (tsum / size) : 1.0, total * (long long)sizeof(float), MPI_Wtime() - t_start);
       for (int r = 0; r < size; r++)
-        len += (size_t)snprintf(text + len, cap - len, "    {\"owned_init\": %llu, \"ghosts_init\": %llu, \"views\": %llu, \"merged\": %llu}%s\n",
-                                rows[4 * r], rows[4 * r + 1], rows[4 * r + 2], rows[4 * r + 3], r + 1 < size ? "," : "");
+        len += (size_t)snprintf(text + len, cap - len, "    {\"owned_init\": %llu, \"ghosts_init\": %llu, \"views\": %llu, \"merged\": %llu, "
+                                "\"ghosts\": %llu, \"bytes_sent\": %llu}%s\n", rows[NROW * r], rows[NROW * r + 1], rows[NROW * r + 2],
+                                rows[NROW * r + 3], rows[NROW * r + 4], rows[NROW * r + 5], r + 1 < size ? "," : "");
       len += (size_t)snprintf(text + len, cap - len, "  ]\n}\n");
       st = mgs_write_file_atomic(path, text, len, &err);
       free(path); free(text);
@@ -417,8 +461,9 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     free(vdb);
   }
   mgs_gaussians_destroy(merged);
-  free(all); free(counts); free(displs); free(rows);
+  free(all); free(counts); free(displs); free(rows); free(heads_lag);
   mgs_trainer_destroy(t);
+  mgs_mpi_ghosts_destroy(gh);
   free(ckpt);
   free(views);
   mgs_partition_destroy(part);

@@ -20,5 +20,27 @@ void mgs_mpi_wait_all(MPI_Request *rq, int n, double limit, const char *what, in
  * here), NULL elsewhere. *voxels_out = the active α voxels this rank contributed. */
 void mgs_mpi_merged_vdb(const mgs_gaussians *merged, const mgs_partition *part, int rank, int size, int resolution,
                         double limit, int explicit_limit, const char *path, unsigned long long *voxels_out);
+
+/* Ghost copies after the hand-off (apps/train_mpi_ghosts.c). Installed as the trainer's
+ * after_step hook (user = the handle): at iteration `handoff` each rank keeps the Gaussians
+ * its block holds and receives read-only copies of the neighbours' Gaussians whose 3σ
+ * support grown by `margin` (world units) reaches its tiles; every `every` iterations
+ * (0: only at the hand-off) the owners send their current values. `sidecar`: where the
+ * fixed layout is kept for --resume. */
+typedef struct mgs_mpi_ghosts mgs_mpi_ghosts;
+mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
+                                      double margin, const char *sidecar);
+void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh);
+struct mgs_trainer;
+mgs_status mgs_mpi_ghosts_after_step(void *user, struct mgs_trainer *t, mgs_error *err);
+/* After a checkpoint was loaded: past the hand-off, the layout is read back from `sidecar`. */
+mgs_status mgs_mpi_ghosts_resume(mgs_mpi_ghosts *gh, struct mgs_trainer *t, mgs_error *err);
+int mgs_mpi_ghosts_active(const mgs_mpi_ghosts *gh);  /* the hand-off has happened */
+size_t mgs_mpi_ghosts_owned(const mgs_mpi_ghosts *gh); /* rows [0, owned) are this rank's */
+size_t mgs_mpi_ghosts_count(const mgs_mpi_ghosts *gh);
+unsigned long long mgs_mpi_ghosts_bytes(const mgs_mpi_ghosts *gh); /* sent by this rank so far */
+long mgs_mpi_ghosts_exchanges(const mgs_mpi_ghosts *gh);
+/* Collective: the largest |ghost - its owner's current value| over this rank's ghosts. */
+mgs_status mgs_mpi_ghosts_lag(mgs_mpi_ghosts *gh, const struct mgs_trainer *t, double *lag, mgs_error *err);
 #endif
 #endif

@@ -126,6 +126,7 @@ typedef struct mgs_adc_options {
 } mgs_adc_options;
 void mgs_adc_options_default(mgs_adc_options *o);
 
+struct mgs_trainer; /* for the hook below; the typedef follows */
 typedef struct mgs_train_options {
   int iterations;            /* 30000 */
   int sh_degree;             /* max SH degree, 3 */
@@ -159,6 +160,11 @@ typedef struct mgs_train_options {
   int view_locality;         /* 1: each epoch visits spatial chunks of views (camera centres
                                 along a Morton curve, max(8, prefetch) a chunk) one after
                                 another, chunks and views within them in random order */
+  /* Called after every whole iteration, before that iteration's periodic checkpoint (so a
+   * checkpoint holds what the hook made of the model): distributed training keeps its ghost
+   * copies here. A nonzero status ends the run. NULL: none. */
+  mgs_status (*after_step)(void *user, struct mgs_trainer *t, mgs_error *err);
+  void *after_step_user;
 } mgs_train_options;
 void mgs_train_options_default(mgs_train_options *o);
 
@@ -202,6 +208,11 @@ int mgs_trainer_model_iteration(const mgs_trainer *t);
 int mgs_trainer_active_sh(const mgs_trainer *t);
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t);
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
+/* Changes the set of Gaussians outside a strategy's hooks (distributed training's hand-off
+ * between blocks): rows with keep[i] == 0 are removed (keep NULL: none), then `add` rows
+ * are appended at *first with zero Adam moments, for the caller to fill through
+ * mgs_trainer_model_mut. Tiles and strategy state follow the new count. */
+mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t add, size_t *first, mgs_error *err);
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
 /* The learning rate the last iteration used for a parameter group. */

@@ -342,6 +342,7 @@ mgs_status mgs_trainer_run_until(mgs_trainer *t, int until, mgs_error *err) {
       break;
     }
     if ((st = mgs_trainer_step(t, err))) break;
+    if (o->after_step && (st = o->after_step(o->after_step_user, t, err))) break;
     if (o->checkpoint_every > 0 && o->checkpoint_path && t->iteration % o->checkpoint_every == 0 &&
         t->iteration < o->iterations && (st = mgs_trainer_save_checkpoint(t, o->checkpoint_path, err)))
       break;
@@ -393,5 +394,18 @@ mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_view
   free(clamped);
   *psnr = sp / (double)use;
   *ssim = ss / (double)use;
+  return MGS_OK;
+}
+
+mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t add, size_t *first, mgs_error *err) {
+  if (keep) mgs_model_compact(t->g, t->adam, keep);
+  size_t f = t->g->n;
+  if (add) {
+    mgs_status st = mgs_model_append(t->g, t->adam, add, &f, err);
+    if (st) return st;
+  }
+  if (first) *first = f;
+  t->grad_clean = 0; /* the gradient rows no longer match the model's */
+  mgs_trainer_scale_invalidate(t);
   return MGS_OK;
 }

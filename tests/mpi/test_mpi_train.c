@@ -4,7 +4,9 @@
  * owns; a bad option and a rank that fails end the run with a message naming them; a
  * rank that never sends its block (hangs) or dies ends the run, named, within bounds; a
  * run cut by a dead rank resumes from every rank's checkpoint to the same model; the merged
- * .vdb built by blocks has the persistence of a single-process build. */
+ * .vdb built by blocks has the persistence of a single-process build; after the hand-off
+ * at the end of densification ghosts are read-only copies of their owners' Gaussians,
+ * refreshed every K steps, and a run resumed past the hand-off is byte-identical. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -245,6 +247,89 @@ static void test_merged_vdb(void) {
   mgs_diagram_destroy(b);
 }
 
+static cJSON *stats_of(const char *run) {
+  char p[800];
+  snprintf(p, sizeof p, "%s/mpi_stats.json", run);
+  char *text = slurp(p);
+  cJSON *j = text ? cJSON_Parse(text) : NULL;
+  free(text);
+  return j;
+}
+static double jget(cJSON *j, const char *k) {
+  cJSON *v = j ? cJSON_GetObjectItem(j, k) : NULL;
+  return v ? v->valuedouble : -999;
+}
+
+/* Ghosts after the hand-off (densification ends at 30 of 60 iterations). Exchanged every
+   step, every ghost equals its owner's value at the end (lag 0: the last iteration steps
+   nothing); every 7 steps, the owners have moved since the last exchange (lag > 0) while
+   the ghosts stayed put — they are read-only between exchanges. Every rank holds ghosts,
+   bytes are counted, the merged model is the owned rows only. --independent keeps the old
+   behaviour (no hand-off). A run cut after the hand-off resumes byte-identical; a damaged
+   ghost layout is refused by name. */
+static void test_ghosts(void) {
+  char run[700], p[800];
+  for (int np = 2; np <= 4; np += 2) {
+    snprintf(run, sizeof run, "%s/ghosts%d", root, np);
+    CHECK_MSG(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 1 --seed 1 --quiet", data, run, np) == 0, "-np %d", np);
+    cJSON *j = stats_of(run);
+    CHECK_MSG(j != NULL, "no stats in %s", run);
+    if (!j) continue;
+    CHECK(jget(j, "handoff") == 30);
+    CHECK_MSG(jget(j, "ghost_lag_max") == 0, "-np %d: ghosts differ from their owners by %g after an exchange every step", np,
+              jget(j, "ghost_lag_max"));
+    CHECK(jget(j, "bytes_exchanged_per_step") > 0);
+    cJSON *pr = cJSON_GetObjectItem(j, "per_rank");
+    double merged = 0;
+    for (int r = 0; r < cJSON_GetArraySize(pr); r++) {
+      cJSON *e = cJSON_GetArrayItem(pr, r);
+      CHECK_MSG(cJSON_GetObjectItem(e, "ghosts")->valuedouble > 0, "-np %d: rank %d received no ghosts", np, r);
+      CHECK(cJSON_GetObjectItem(e, "bytes_sent")->valuedouble > 0);
+      merged += cJSON_GetObjectItem(e, "merged")->valuedouble;
+    }
+    CHECK(merged == jget(j, "gaussians"));
+    cJSON_Delete(j);
+  }
+  snprintf(run, sizeof run, "%s/ghosts_lag", root);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --seed 1 --quiet", data, run, 2) == 0);
+  cJSON *j = stats_of(run);
+  CHECK_MSG(jget(j, "ghost_lag_max") > 1e-6, "exchanges every 7 steps: lag %g (ghosts not read-only, or owners not trained?)",
+            jget(j, "ghost_lag_max"));
+  cJSON_Delete(j);
+  snprintf(run, sizeof run, "%s/ghosts_indep", root);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --independent --seed 1 --quiet", data, run, 2) == 0);
+  j = stats_of(run);
+  CHECK(jget(j, "handoff") == -1 && jget(j, "bytes_exchanged") == 0);
+  cJSON_Delete(j);
+  /* resume past the hand-off */
+  char ref[700], cut[700], pa[800], pb[800];
+  snprintf(ref, sizeof ref, "%s/ghosts_lag", root);
+  snprintf(cut, sizeof cut, "%s/ghosts_cut", root);
+  setenv("MGS_MPI_FAULT", "exit-at:1:45", 1);
+  int rc = sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet", data, cut, -2);
+  unsetenv("MGS_MPI_FAULT");
+  CHECK(rc != 0 && rc != 124);
+  snprintf(p, sizeof p, "%s/ranks/rank_1.ghosts", cut);
+  CHECK_MSG(mgs_path_exists(p), "no ghost layout %s", p);
+  char save[900], cmd[4096];
+  snprintf(save, sizeof save, "%s.bak", p);
+  snprintf(cmd, sizeof cmd, "cp '%s' '%s' && truncate -s 20 '%s'", p, save, p);
+  CHECK(system(cmd) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, -2) != 0);
+  char *log = slurp(logp);
+  CHECK_MSG(log && strstr(log, "rank_1.ghosts: not the ghost layout"), "log: %s", log ? log : "");
+  free(log);
+  snprintf(cmd, sizeof cmd, "mv '%s' '%s'", save, p);
+  CHECK(system(cmd) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, 2) == 0);
+  log = slurp(logp);
+  CHECK_MSG(log && strstr(log, "rank_1.mgsckpt at iteration 40"), "log: %s", log ? log : "");
+  free(log);
+  snprintf(pa, sizeof pa, "%s/point_cloud/iteration_60/point_cloud.ply", ref);
+  snprintf(pb, sizeof pb, "%s/point_cloud/iteration_60/point_cloud.ply", cut);
+  CHECK_MSG(same_file(pa, pb), "resumed past the hand-off: differs from the uninterrupted run (%s, %s)", pa, pb);
+}
+
 /* `morsegs bench mpi` end to end at a toy size: it runs, and its table has a row per model
    with finite PSNRs and the gathered bytes (the figures themselves are the README's). */
 static void test_bench(void) {
@@ -256,8 +341,8 @@ static void test_bench(void) {
   char md[800];
   snprintf(md, sizeof md, "%s/mpi.md", out);
   char *t = slurp(md);
-  CHECK_MSG(t && strstr(t, "| 2 | 2 blocks, merged | 10 |") && strstr(t, "| 1 | one process, same total steps | 20 |"), "mpi.md: %s",
-            t ? t : "(none)");
+  CHECK_MSG(t && strstr(t, "| 2 | 2 blocks, independent | 10 |") && strstr(t, "| 2 | 2 blocks, ghosts every 10 steps | 10 |") &&
+            strstr(t, "| 1 | one process, same total steps | 20 |"), "mpi.md: %s", t ? t : "(none)");
   CHECK(t && !strstr(t, "| nan | nan |"));
   free(t);
 }
@@ -284,6 +369,7 @@ int main(int argc, char **argv) {
   RUN(test_lost_rank);
   RUN(test_resume);
   RUN(test_merged_vdb);
+  RUN(test_ghosts);
   RUN(test_bench);
   mgs_remove_tree(root, &err);
   return mgs_test_finish();

@@ -1,0 +1,315 @@
+/* Ghost copies between the blocks of `morsegs train --mpi` (apps/train_mpi.h).
+ *
+ * Until the hand-off (the end of densification) every rank trains its block plus a margin
+ * on its own. At the hand-off ownership is decided by position: each Gaussian is kept by
+ * the rank whose block holds its mean, and the copies a rank trained of its neighbours'
+ * margins are dropped (the owners' own Gaussians cover those regions; moving them over
+ * would double the content there). Then each rank receives read-only ghost copies of the
+ * neighbours' Gaussians whose 3σ support, grown by the margin, reaches one of its tiles.
+ * Densification is over, so the rows stay fixed from here on: every K iterations each
+ * owner sends the current parameters of the rows it exports through one
+ * MPI_Neighbor_alltoallv on a distributed-graph communicator of the ranks that share
+ * ghosts, and after every step the ghosts are put back to the values last received, so
+ * only their owners' gradients move them.
+ *
+ * The rows and neighbours are fixed at the hand-off and written to RUN/ranks/rank_K.ghosts,
+ * so a rank resumed from a later checkpoint (which holds the ghosts as last received, the
+ * hook runs before the checkpoint) continues exactly. */
+#ifdef MGS_HAVE_MPI
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "apps/train_mpi.h"
+#include "core/mgs_core.h"
+#include "train/mgs_train.h"
+
+struct mgs_mpi_ghosts {
+  int rank, size, handoff, every;
+  const mgs_partition *part;
+  double margin;          /* world units */
+  char *sidecar;          /* RUN/ranks/rank_K.ghosts */
+  int active, dims;
+  size_t n_own, n_ghost;  /* rows [0, n_own) owned, [n_own, n_own + n_ghost) ghosts */
+  MPI_Comm graph;
+  int n_nb;
+  int *nb, *srows, *rrows;           /* neighbours; rows sent to / received from each */
+  int *scount, *sdispl, *rcount, *rdispl; /* the same in floats, for the collective */
+  uint32_t *exp;          /* owned rows sent, neighbour after neighbour */
+  size_t n_exp;
+  float *vals, *sbuf;     /* ghost rows / rows to send, [row][dims] */
+  unsigned long long bytes_sent;
+  long exchanges;
+};
+
+mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
+                                      double margin, const char *sidecar) {
+  mgs_mpi_ghosts *gh = calloc(1, sizeof *gh);
+  if (!gh) return NULL;
+  gh->rank = rank; gh->size = size; gh->handoff = handoff; gh->every = every;
+  gh->part = part; gh->margin = margin; gh->graph = MPI_COMM_NULL;
+  gh->sidecar = strdup(sidecar);
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) gh->dims += mgs_param_dim((mgs_param_group)k);
+  if (!gh->sidecar) { free(gh); return NULL; }
+  return gh;
+}
+
+void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh) {
+  if (!gh) return;
+  if (gh->graph != MPI_COMM_NULL) MPI_Comm_free(&gh->graph);
+  free(gh->sidecar); free(gh->nb); free(gh->srows); free(gh->rrows);
+  free(gh->scount); free(gh->sdispl); free(gh->rcount); free(gh->rdispl);
+  free(gh->exp); free(gh->vals); free(gh->sbuf);
+  free(gh);
+}
+
+int mgs_mpi_ghosts_active(const mgs_mpi_ghosts *gh) { return gh && gh->active; }
+size_t mgs_mpi_ghosts_owned(const mgs_mpi_ghosts *gh) { return gh->n_own; }
+size_t mgs_mpi_ghosts_count(const mgs_mpi_ghosts *gh) { return gh->n_ghost; }
+unsigned long long mgs_mpi_ghosts_bytes(const mgs_mpi_ghosts *gh) { return gh ? gh->bytes_sent : 0; }
+long mgs_mpi_ghosts_exchanges(const mgs_mpi_ghosts *gh) { return gh ? gh->exchanges : 0; }
+
+/* rows of `g` -> [row][dims] */
+static void pack_rows(const mgs_gaussians *g, const uint32_t *rows, size_t n, int dims, float *out) {
+  size_t off = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+    size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+    const float *src = mgs_gaussians_group((mgs_gaussians *)g, (mgs_param_group)k);
+    for (size_t j = 0; j < n; j++) memcpy(out + j * (size_t)dims + off, src + (size_t)rows[j] * d, d * sizeof(float));
+    off += d;
+  }
+}
+
+/* the ghosts back to the values last received */
+static void restore(mgs_mpi_ghosts *gh, mgs_gaussians *g) {
+  size_t off = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+    size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+    float *dst = mgs_gaussians_group(g, (mgs_param_group)k) + gh->n_own * d;
+    for (size_t j = 0; j < gh->n_ghost; j++) memcpy(dst + j * d, gh->vals + j * (size_t)gh->dims + off, d * sizeof(float));
+    off += d;
+  }
+}
+
+static mgs_status set_counts(mgs_mpi_ghosts *gh, mgs_error *err) {
+  size_t s = 0, r = 0;
+  gh->scount = calloc((size_t)gh->n_nb + 1, sizeof(int)); gh->sdispl = calloc((size_t)gh->n_nb + 1, sizeof(int));
+  gh->rcount = calloc((size_t)gh->n_nb + 1, sizeof(int)); gh->rdispl = calloc((size_t)gh->n_nb + 1, sizeof(int));
+  if (!gh->scount || !gh->sdispl || !gh->rcount || !gh->rdispl) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (int i = 0; i < gh->n_nb; i++) {
+    gh->sdispl[i] = (int)(s * (size_t)gh->dims); gh->scount[i] = gh->srows[i] * gh->dims; s += (size_t)gh->srows[i];
+    gh->rdispl[i] = (int)(r * (size_t)gh->dims); gh->rcount[i] = gh->rrows[i] * gh->dims; r += (size_t)gh->rrows[i];
+  }
+  if ((s + r) * (size_t)gh->dims > (size_t)INT32_MAX)
+    return mgs_error_set(err, MGS_ERR_ARG, "too many ghost Gaussians for one MPI exchange (%zu sent, %zu received)", s, r);
+  gh->n_exp = s;
+  gh->n_ghost = r;
+  gh->vals = malloc((r ? r : 1) * (size_t)gh->dims * sizeof(float));
+  gh->sbuf = malloc((s ? s : 1) * (size_t)gh->dims * sizeof(float));
+  if (!gh->vals || !gh->sbuf) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory for %zu ghost Gaussians", r);
+  /* weights as rows received (gcc takes Open MPI's MPI_UNWEIGHTED sentinel for an empty array) */
+  int *w = malloc(((size_t)gh->n_nb + 1) * sizeof(int));
+  if (!w) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (int i = 0; i < gh->n_nb; i++) w[i] = gh->rrows[i] + gh->srows[i];
+  int rc = MPI_Dist_graph_create_adjacent(MPI_COMM_WORLD, gh->n_nb, gh->nb, w, gh->n_nb, gh->nb, w, MPI_INFO_NULL, 0, &gh->graph);
+  free(w);
+  if (rc != MPI_SUCCESS) return mgs_error_set(err, MGS_ERR_IO, "MPI_Dist_graph_create_adjacent failed");
+  return MGS_OK;
+}
+
+static mgs_status exchange(mgs_mpi_ghosts *gh, const mgs_gaussians *g, mgs_error *err) {
+  pack_rows(g, gh->exp, gh->n_exp, gh->dims, gh->sbuf);
+  if (MPI_Neighbor_alltoallv(gh->sbuf, gh->scount, gh->sdispl, MPI_FLOAT, gh->vals, gh->rcount, gh->rdispl, MPI_FLOAT,
+                             gh->graph) != MPI_SUCCESS)
+    return mgs_error_set(err, MGS_ERR_IO, "MPI_Neighbor_alltoallv of the ghosts failed");
+  gh->bytes_sent += (unsigned long long)gh->n_exp * (unsigned long long)gh->dims * sizeof(float);
+  gh->exchanges++;
+  return MGS_OK;
+}
+
+/* the ranks other than this one whose tiles the box [lo, hi] touches (samples no farther
+   apart than a tile hit every tile the box overlaps), as a bit set */
+static void touched_ranks(const mgs_partition *p, const double lo[3], const double hi[3], uint8_t *hit) {
+  int n[3];
+  double step[3];
+  for (int a = 0; a < 3; a++) {
+    double ext = hi[a] - lo[a];
+    n[a] = ext > 0 ? (int)ceil(ext / p->tile) + 1 : 1;
+    if (n[a] > 64) n[a] = 64; /* a Gaussian far larger than a tile: coarse, still safe */
+    step[a] = n[a] > 1 ? ext / (n[a] - 1) : 0;
+  }
+  for (int i = 0; i < n[0]; i++)
+    for (int j = 0; j < n[1]; j++)
+      for (int k = 0; k < n[2]; k++) {
+        float x[3] = {(float)(lo[0] + i * step[0]), (float)(lo[1] + j * step[1]), (float)(lo[2] + k * step[2])};
+        hit[mgs_partition_owner(p, x)] = 1;
+      }
+}
+
+static mgs_status write_sidecar(const mgs_mpi_ghosts *gh, mgs_error *err) {
+  size_t cap = 64 + (size_t)gh->n_nb * 3 * sizeof(int) + gh->n_exp * sizeof(uint32_t), len = 0;
+  char *buf = malloc(cap);
+  if (!buf) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  uint64_t head[4] = {0x3154534f4847ull /* "GHOST1" */, (uint64_t)gh->handoff, (uint64_t)gh->n_own, (uint64_t)gh->n_nb};
+  memcpy(buf, head, sizeof head); len = sizeof head;
+  memcpy(buf + len, gh->nb, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
+  memcpy(buf + len, gh->srows, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
+  memcpy(buf + len, gh->rrows, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
+  memcpy(buf + len, gh->exp, gh->n_exp * sizeof(uint32_t)); len += gh->n_exp * sizeof(uint32_t);
+  mgs_status st = mgs_write_file_atomic(gh->sidecar, buf, len, err);
+  free(buf);
+  return st;
+}
+
+static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
+  const mgs_partition *p = gh->part;
+  mgs_gaussians *g = mgs_trainer_model_mut(t);
+  uint8_t *keep = malloc(g->n ? g->n : 1);
+  if (!keep) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (size_t i = 0; i < g->n; i++) keep[i] = (uint8_t)(mgs_partition_owner(p, g->mean + 3 * i) == gh->rank);
+  mgs_status st = mgs_trainer_edit_model(t, keep, 0, NULL, err);
+  free(keep);
+  if (st) return st;
+  g = mgs_trainer_model_mut(t);
+  gh->n_own = g->n;
+  /* which owned rows each other rank needs */
+  int size = gh->size;
+  uint8_t *hit = calloc((size_t)size, 1);
+  int *sendn = calloc((size_t)size, sizeof(int)), *recvn = calloc((size_t)size, sizeof(int));
+  uint32_t **lists = calloc((size_t)size, sizeof *lists);
+  size_t *cap = calloc((size_t)size, sizeof *cap);
+  if (!hit || !sendn || !recvn || !lists || !cap) { st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+  for (size_t i = 0; i < g->n && !st; i++) {
+    const float *s = g->log_scale + 3 * i;
+    double r = 3.0 * exp(fmax(s[0], fmax(s[1], s[2]))) + gh->margin, lo[3], hi[3];
+    if (!isfinite(r)) r = gh->margin;
+    for (int a = 0; a < 3; a++) { lo[a] = g->mean[3 * i + a] - r; hi[a] = g->mean[3 * i + a] + r; }
+    memset(hit, 0, (size_t)size);
+    touched_ranks(p, lo, hi, hit);
+    for (int q = 0; q < size; q++) {
+      if (q == gh->rank || !hit[q]) continue;
+      if ((size_t)sendn[q] == cap[q]) {
+        cap[q] = cap[q] ? 2 * cap[q] : 1024;
+        uint32_t *nl = realloc(lists[q], cap[q] * sizeof(uint32_t));
+        if (!nl) { st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); break; }
+        lists[q] = nl;
+      }
+      lists[q][sendn[q]++] = (uint32_t)i;
+    }
+  }
+  /* every rank must reach the collectives below, also one that failed above */
+  int bad = st != MGS_OK, any_bad = 0;
+  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (any_bad) { if (!st) st = mgs_error_set(err, MGS_ERR_IO, "another rank failed at the hand-off"); goto done; }
+  MPI_Alltoall(sendn, 1, MPI_INT, recvn, 1, MPI_INT, MPI_COMM_WORLD);
+  gh->nb = malloc((size_t)size * sizeof(int)); gh->srows = malloc((size_t)size * sizeof(int));
+  gh->rrows = malloc((size_t)size * sizeof(int));
+  size_t total = 0;
+  for (int q = 0; q < size; q++) total += (size_t)sendn[q];
+  gh->exp = malloc((total ? total : 1) * sizeof(uint32_t));
+  if (!gh->nb || !gh->srows || !gh->rrows || !gh->exp) { st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+  total = 0;
+  for (int q = 0; q < size; q++) {
+    if (q == gh->rank || (!sendn[q] && !recvn[q])) continue;
+    gh->nb[gh->n_nb] = q; gh->srows[gh->n_nb] = sendn[q]; gh->rrows[gh->n_nb] = recvn[q]; gh->n_nb++;
+    if (sendn[q]) memcpy(gh->exp + total, lists[q], (size_t)sendn[q] * sizeof(uint32_t));
+    total += (size_t)sendn[q];
+  }
+  if ((st = set_counts(gh, err))) goto done;
+  if ((st = exchange(gh, g, err))) goto done;
+  size_t first = 0;
+  if ((st = mgs_trainer_edit_model(t, NULL, gh->n_ghost, &first, err))) goto done;
+  gh->active = 1;
+  restore(gh, mgs_trainer_model_mut(t));
+  st = write_sidecar(gh, err);
+done:
+  if (lists) for (int q = 0; q < size; q++) free(lists[q]);
+  free(lists); free(cap); free(hit); free(sendn); free(recvn);
+  return st;
+}
+
+mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err) {
+  mgs_mpi_ghosts *gh = user;
+  int it = mgs_trainer_iteration(t);
+  if (!gh->active) return it == gh->handoff ? handoff(gh, t, err) : MGS_OK;
+  if (gh->every > 0 && (it - gh->handoff) % gh->every == 0) {
+    mgs_status st = exchange(gh, mgs_trainer_model(t), err);
+    if (st) return st;
+  }
+  restore(gh, mgs_trainer_model_mut(t));
+  return MGS_OK;
+}
+
+mgs_status mgs_mpi_ghosts_resume(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
+  if (mgs_trainer_iteration(t) < gh->handoff) return MGS_OK; /* the hand-off is still to come */
+  char *buf = NULL;
+  size_t len = 0;
+  mgs_status st = mgs_read_file(gh->sidecar, &buf, &len, err);
+  if (st) return st;
+  uint64_t head[4];
+  const mgs_gaussians *g = mgs_trainer_model(t);
+  if (len < sizeof head) goto bad;
+  memcpy(head, buf, sizeof head);
+  if (head[0] != 0x3154534f4847ull || head[1] != (uint64_t)gh->handoff || head[2] > g->n || head[3] > (uint64_t)gh->size)
+    goto bad;
+  gh->n_own = (size_t)head[2];
+  gh->n_nb = (int)head[3];
+  size_t off = sizeof head, nbytes = (size_t)gh->n_nb * sizeof(int);
+  if (len < off + 3 * nbytes) goto bad;
+  gh->nb = malloc(nbytes + 1); gh->srows = malloc(nbytes + 1); gh->rrows = malloc(nbytes + 1);
+  if (!gh->nb || !gh->srows || !gh->rrows) { free(buf); return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); }
+  memcpy(gh->nb, buf + off, nbytes); off += nbytes;
+  memcpy(gh->srows, buf + off, nbytes); off += nbytes;
+  memcpy(gh->rrows, buf + off, nbytes); off += nbytes;
+  size_t s = 0, r = 0;
+  for (int i = 0; i < gh->n_nb; i++) {
+    if (gh->nb[i] < 0 || gh->nb[i] >= gh->size || gh->nb[i] == gh->rank || gh->srows[i] < 0 || gh->rrows[i] < 0) goto bad;
+    s += (size_t)gh->srows[i]; r += (size_t)gh->rrows[i];
+  }
+  if (len != off + s * sizeof(uint32_t) || gh->n_own + r != g->n) goto bad;
+  gh->exp = malloc((s ? s : 1) * sizeof(uint32_t));
+  if (!gh->exp) { free(buf); return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); }
+  memcpy(gh->exp, buf + off, s * sizeof(uint32_t));
+  for (size_t j = 0; j < s; j++) if (gh->exp[j] >= gh->n_own) goto bad;
+  free(buf);
+  if ((st = set_counts(gh, err))) return st;
+  /* the checkpoint holds the ghosts as last received */
+  uint32_t *rows = malloc((gh->n_ghost ? gh->n_ghost : 1) * sizeof(uint32_t));
+  if (!rows) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (size_t j = 0; j < gh->n_ghost; j++) rows[j] = (uint32_t)(gh->n_own + j);
+  pack_rows(g, rows, gh->n_ghost, gh->dims, gh->vals);
+  free(rows);
+  gh->active = 1;
+  return MGS_OK;
+bad:
+  free(buf);
+  return mgs_error_set(err, MGS_ERR_FORMAT, "%s: not the ghost layout of this rank's checkpoint (written at the hand-off, "
+                       "iteration %d); resume is not possible without it", gh->sidecar, gh->handoff);
+}
+/* One more exchange into a scratch buffer: the largest difference between a ghost as
+   this rank holds it and its owner's current value (0 right after an exchange). */
+mgs_status mgs_mpi_ghosts_lag(mgs_mpi_ghosts *gh, const mgs_trainer *t, double *lag, mgs_error *err) {
+  *lag = 0;
+  if (!gh->active) return MGS_OK;
+  size_t nv = gh->n_ghost * (size_t)gh->dims;
+  float *now = malloc((nv ? nv : 1) * sizeof(float));
+  if (!now) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  pack_rows(mgs_trainer_model(t), gh->exp, gh->n_exp, gh->dims, gh->sbuf);
+  if (MPI_Neighbor_alltoallv(gh->sbuf, gh->scount, gh->sdispl, MPI_FLOAT, now, gh->rcount, gh->rdispl, MPI_FLOAT,
+                             gh->graph) != MPI_SUCCESS) {
+    free(now);
+    return mgs_error_set(err, MGS_ERR_IO, "MPI_Neighbor_alltoallv of the ghosts failed");
+  }
+  const mgs_gaussians *g = mgs_trainer_model(t);
+  size_t off = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+    size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+    const float *held = mgs_gaussians_group((mgs_gaussians *)g, (mgs_param_group)k) + gh->n_own * d;
+    for (size_t j = 0; j < gh->n_ghost; j++)
+      for (size_t c = 0; c < d; c++) *lag = fmax(*lag, fabs((double)held[j * d + c] - now[j * (size_t)gh->dims + off + c]));
+    off += d;
+  }
+  free(now);
+  return MGS_OK;
+}
+#endif

@@ -6,7 +6,8 @@
  * each run in its own process (so peak RSS is that run's), all runs in one invocation
  * (compare within it: the machine may be shared). Reports seconds per iteration, peak
  * RSS, the marginal resident bytes per Gaussian between N = 1 and the largest N, the
- * bytes per Gaussian of the training state by component, and the image-cache hit rate.
+ * bytes per Gaussian of the training state by component, the image-cache hit rate, and
+ * the Morse analysis' seconds from scratch and incremental after one block changed.
  * Writes OUT/scale.md, OUT/scale.csv and OUT/scale.png. */
 #include <getopt.h>
 #include <math.h>
@@ -22,6 +23,7 @@
 #include "render/mgs_scene.h"
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "train/mgs_morse.h"
 
 enum { CONF_REF = 0, CONF_SCALE = 1, N_CONF = 2 };
 static const char *conf_name[N_CONF] = {"reference", "scale"};
@@ -31,6 +33,9 @@ typedef struct result {
   int size, conf, ok;
   size_t gaussians, views;
   double s_per_iter, peak_mb, listed, hit_rate, setup_s, loss, fwd_ms, bwd_ms;
+  /* Morse analysis of the trained model (scale runs): from scratch, then again after one
+     corner block of the city changed, incremental (-1: not measured) */
+  double an_full_s, an_alpha_full_s, an_incr_s, an_alpha_incr_s, an_reused, an_leaves;
 } result;
 
 /* ---- child: one training run, one line of results on stdout ---- */
@@ -79,6 +84,37 @@ static int child(const char *data, int conf, int iters, int warmup, int cache_mb
          conf == CONF_SCALE ? listed : (double)mgs_trainer_model(t)->n,
          hits + misses ? (double)hits / (double)(hits + misses) : -1.0, setup, mgs_trainer_last_loss(t),
          (ph1[0] - ph0[0]) * per, (ph1[2] + ph1[4] - ph0[2] - ph0[4]) * per);
+  fflush(stdout);
+  if (conf == CONF_SCALE) {
+    /* the Morse analysis at a fixed voxel size (128 voxels along the diagonal of city 1),
+       from scratch, then after the Gaussians of one corner block (1/N² of the city) changed
+       their opacity: incremental, only that block's α leaves rebuilt */
+    mgs_gaussians *g = mgs_gaussians_clone(mgs_trainer_model(t));
+    mgs_morse_options mo;
+    mgs_morse_options_default(&mo);
+    mo.topo = MGS_MORSE_TOPO_ELIMINATE; /* so the persistence is computed */
+    mo.warmup = 1; mo.every = 1; mo.until = 1 << 30;
+    mo.resolution = 128 * size;
+    mo.eps_sig /= size; mo.eps_p /= size; /* thresholds, and so the band, fixed in world units */
+    mo.incremental = 1;
+    mgs_morse_ctx *mc = NULL;
+    double lo[3], hi[3];
+    if (g && mgs_points_bounds_robust(g->mean, g->n, lo, hi) && !mgs_morse_ctx_create(&mo, NULL, &mc, &err) &&
+        !mgs_morse_analyze(mc, g, 1, &err)) {
+      mgs_morse_result a = *mgs_morse_ctx_result(mc);
+      for (size_t i = 0; i < g->n; i++)
+        if (g->mean[3 * i] < lo[0] + (hi[0] - lo[0]) / size && g->mean[3 * i + 1] < lo[1] + (hi[1] - lo[1]) / size)
+          g->opacity[i] += 0.5f;
+      if (!mgs_morse_analyze(mc, g, 2, &err)) {
+        const mgs_morse_result *b = mgs_morse_ctx_result(mc);
+        printf("ANALYSIS %.4f %.4f %.4f %.4f %zu %zu\n", a.seconds[5], a.seconds[0], b->seconds[5], b->seconds[0], b->leaves_reused,
+               b->leaves);
+      }
+    }
+    if (err.msg[0]) fprintf(stderr, "bench scale: analysis: %s\n", err.msg);
+    mgs_morse_ctx_unref(mc);
+    mgs_gaussians_destroy(g);
+  }
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
   return 0;
@@ -93,10 +129,14 @@ static int run_child(const char *self, const char *data, int conf, int iters, in
   if (!p) return 0;
   char line[512];
   int ok = 0;
-  while (fgets(line, sizeof line, p))
+  r->an_full_s = r->an_alpha_full_s = r->an_incr_s = r->an_alpha_incr_s = r->an_reused = r->an_leaves = -1;
+  while (fgets(line, sizeof line, p)) {
+    sscanf(line, "ANALYSIS %lf %lf %lf %lf %lf %lf", &r->an_full_s, &r->an_alpha_full_s, &r->an_incr_s, &r->an_alpha_incr_s,
+           &r->an_reused, &r->an_leaves);
     if (sscanf(line, "RESULT %d %d %zu %zu %lf %lf %lf %lf %lf %lf %lf %lf", &r->size, &r->conf, &r->gaussians, &r->views,
                &r->s_per_iter, &r->peak_mb, &r->listed, &r->hit_rate, &r->setup_s, &r->loss, &r->fwd_ms, &r->bwd_ms) == 12)
       ok = 1;
+  }
   int rc = pclose(p);
   r->ok = ok && rc == 0;
   return r->ok;
@@ -274,6 +314,9 @@ int mgs_bench_scale(int argc, char **argv) {
                "%.0f projected/iter, hit rate %s%.2f\n",
                sizes[s], conf_name[k], r->gaussians, r->views, r->s_per_iter, r->fwd_ms, r->bwd_ms, r->peak_mb, r->listed,
                r->hit_rate < 0 ? "-" : "", r->hit_rate < 0 ? 0.0 : r->hit_rate);
+      if (r->an_full_s >= 0)
+        printf("N=%d Morse analysis %.2f s (alpha %.2f s); after one block changed, incremental %.2f s (alpha %.2f s, %.0f of %.0f leaves reused)\n",
+               sizes[s], r->an_full_s, r->an_alpha_full_s, r->an_incr_s, r->an_alpha_incr_s, r->an_reused, r->an_leaves);
       fflush(stdout);
     }
   lf = fopen("/proc/loadavg", "r");
@@ -339,6 +382,17 @@ int mgs_bench_scale(int argc, char **argv) {
   double per = marginal > 0 ? fmax(marginal, b_total) : b_total;
   fprintf(f, " At %.0f B a Gaussian, 10M Gaussians need %.1f GiB (projected from these figures, not run).\n",
           per, per * 1e7 / 1073741824.0);
+  fprintf(f, "\nMorse analysis of each scale run's model (α-field, SDF, persistence; 128 voxels along city 1's diagonal, "
+             "the same voxel size and band at every N), from scratch and again after the Gaussians of one corner block (1/N² of "
+             "the city) changed, with `--morse-incremental` (only that block's α leaves rebuilt; the SDF and persistence "
+             "are still computed whole):\n\n| N | analysis s | α s | after one block changed: analysis s | α s | α leaves reused |\n"
+             "|---|---|---|---|---|---|\n");
+  for (int k = 0; k < n_sizes * N_CONF; k++) {
+    const result *r = &results[k];
+    if (!r->ok || r->conf != CONF_SCALE || r->an_full_s < 0) continue;
+    fprintf(f, "| %d | %.2f | %.2f | %.2f | %.2f | %.0f of %.0f (%.0f %%) |\n", r->size, r->an_full_s, r->an_alpha_full_s, r->an_incr_s,
+            r->an_alpha_incr_s, r->an_reused, r->an_leaves, r->an_leaves > 0 ? 100.0 * r->an_reused / r->an_leaves : 0.0);
+  }
   fclose(f);
   snprintf(path, sizeof path, "%s/scale.png", out);
   plot(results, n_sizes, sizes, path);

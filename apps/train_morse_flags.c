@@ -25,18 +25,19 @@ const char *train_morse_flags_usage =
     "      --morse-every K (500)  --morse-warmup W (3000)  --morse-until U (15000)\n"
     "      --morse-resolution R (256)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"
     "      --gap-max G (0.05)  --min-cameras M (3)  --floater-volume F (0.01)  --floater-mass F (0.01)\n"
-    "      --max-spawn N (1000)\n"
+    "      --max-spawn N (1000)  --morse-incremental: keep the lattice, rebuild only changed α leaves\n"
     "      analysis rows: RUN/morse_analysis.csv\n";
 
 typedef enum { K_PRESET, K_LITERAL, K_SPAWN, K_PRUNE, K_TOPO, K_BETA, K_EPSP, K_EPSSIG, K_DIMS, K_EVERY, K_WARMUP,
-               K_UNTIL, K_RES, K_TAU, K_SDF, K_GAP, K_MINCAM, K_FVOL, K_FMASS, K_MAXSPAWN, K_MINBAR, K_COUNT } key;
+               K_UNTIL, K_RES, K_TAU, K_SDF, K_GAP, K_MINCAM, K_FVOL, K_FMASS, K_MAXSPAWN, K_MINBAR, K_INCR, K_COUNT } key;
 static const struct { const char *name; int arg; const char *cfg; } flags[K_COUNT] = {
     {"preset", 1, "preset"}, {"literal", 0, "literal"}, {"spawn", 1, "morse_spawn"}, {"prune", 1, "morse_prune"},
     {"topo-loss", 2, "topo_loss"}, {"beta", 1, "topo_beta"}, {"eps-p", 1, "eps_p"}, {"eps-sig", 1, "eps_sig"},
     {"topo-dims", 1, "topo_dims"}, {"morse-every", 1, "morse_every"}, {"morse-warmup", 1, "morse_warmup"},
     {"morse-until", 1, "morse_until"}, {"morse-resolution", 1, "morse_resolution"}, {"morse-tau", 1, "morse_tau"},
     {"morse-sdf", 1, "morse_sdf"}, {"gap-max", 1, "gap_max"}, {"min-cameras", 1, "min_cameras"},
-    {"floater-volume", 1, "floater_volume"}, {"floater-mass", 1, "floater_mass"}, {"max-spawn", 1, "max_spawn"}, {"min-bar", 1, "min_bar"}};
+    {"floater-volume", 1, "floater_volume"}, {"floater-mass", 1, "floater_mass"}, {"max-spawn", 1, "max_spawn"}, {"min-bar", 1, "min_bar"},
+    {"morse-incremental", 0, "morse_incremental"}};
 
 static int fail(const char *flag, const char *fmt, const char *v) {
   fprintf(stderr, "morsegs train: --%s ", flag);
@@ -76,6 +77,7 @@ static int apply(train_morse_flags *f, key k, const char *v) {
         return fail("preset", "must be baseline, morse-d, morse-r, morse-i or morse-full (got '%s')", v);
       f->preset = v; return 1;
     case K_LITERAL: f->literal = !v || !strcmp(v, "True") || !strcmp(v, "1"); return 1;
+    case K_INCR: o->incremental = !v || !strcmp(v, "True") || !strcmp(v, "1"); return 1;
     case K_SPAWN: if ((i = pick(v, spawn_names, 3)) < 0) return fail("spawn", "must be gaps, literal or none (got '%s')", v); o->spawn = (mgs_morse_spawn)i; f->spawn_typed = 1; return 1;
     case K_PRUNE: if ((i = pick(v, prune_names, 3)) < 0) return fail("prune", "must be floaters, literal or none (got '%s')", v); o->prune = (mgs_morse_prune)i; f->prune_typed = 1; return 1;
     case K_TOPO: if ((i = pick(v ? v : "eliminate", topo_names, 3)) < 0) return fail("topo-loss", "must be eliminate, literal or none (got '%s')", v); o->topo = (mgs_morse_topo)i; f->topo_typed = 1; return 1;
@@ -230,6 +232,7 @@ void train_morse_flags_record(const train_morse_flags *f, const char *strategy, 
   const mgs_morse_options *o = &f->o;
   mgs_settings_set(s, "preset", f->preset ? f->preset : "none", 1);
   mgs_settings_set(s, "literal", f->literal ? "True" : "False", 0);
+  mgs_settings_set(s, "morse_incremental", f->o.incremental ? "True" : "False", 0);
   int morse = !strcmp(strategy, "morse");
   if (!morse && o->topo == MGS_MORSE_TOPO_NONE) return;
   mgs_settings_set(s, "morse_spawn", spawn_names[o->spawn], 1);

@@ -71,6 +71,12 @@ typedef struct mgs_morse_options {
   unsigned dims;          /* dimensions in the loss, bit k = H_k (0x7) */
   double min_bar;         /* bars shorter than this many voxels stay out of the loss (0.5:
                              below the SDF's accuracy they are discretization noise) */
+  /* Large scenes: 1 keeps the voxel size while the analysed box's diagonal stays within
+     10 % of the one it was set from, and builds the α-field incrementally (leaves whose
+     Gaussians did not change since the last analysis are copied, bit-identical to a
+     full build: vdb's alpha cache); the SDF and the persistence are still computed whole.
+     0 (default): every analysis from scratch at diagonal / resolution. */
+  int incremental;
 } mgs_morse_options;
 
 void mgs_morse_options_default(mgs_morse_options *o);
@@ -101,6 +107,7 @@ typedef struct mgs_morse_result {
   int betti_eps[3];       /* ... of those, persistence > the largest threshold in use */
   double seconds[6];      /* alpha, sdf, persistence, closest points, components, total */
   size_t active_voxels;
+  size_t leaves, leaves_reused; /* the α-field's 8³ leaves; copied from the last analysis */
 } mgs_morse_result;
 
 typedef struct mgs_morse_ctx mgs_morse_ctx;

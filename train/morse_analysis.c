@@ -100,6 +100,7 @@ static void drop_transient(mgs_morse_ctx *c) {
 void mgs_morse_ctx_unref(mgs_morse_ctx *c) {
   if (!c || --c->refs > 0) return;
   drop_transient(c);
+  mgs_vdb_alpha_cache_destroy(c->acache);
   free(c->r.pairs);
   free(c->rows);
   free(c->csv_path);
@@ -249,6 +250,8 @@ static mgs_status push_row(mgs_morse_ctx *c, mgs_error *err) {
   memcpy(w->betti_eps, c->r.betti_eps, sizeof w->betti_eps);
   w->pairs = c->r.n;
   w->topo = NAN;
+  w->leaves = c->r.leaves;
+  w->leaves_reused = c->r.leaves_reused;
   return MGS_OK;
 }
 
@@ -302,6 +305,12 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
   double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
   if (!(diag > 0)) diag = 1e-3;
   double h = diag / o->resolution;
+  if (o->incremental) {
+    /* the same lattice as the last analysis while the box has not changed much, so the
+       α leaves of regions whose Gaussians did not change can be reused */
+    if (c->h_fixed > 0 && fabs(diag - c->diag_fixed) <= 0.1 * c->diag_fixed) h = c->h_fixed;
+    else { c->h_fixed = h; c->diag_fixed = diag; }
+  }
   int hw = mgs_topo_band_for_threshold(morse_eps_in_use(o, diag), o->spawn == MGS_MORSE_SPAWN_GAPS ? o->gap_max * diag : 0, h);
   if (hw < 1) hw = 1;
   c->r.diagonal = diag; c->r.voxel_size = h; c->r.half_width = hw * h;
@@ -311,7 +320,16 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
   ap.voxel_size = h;
   ap.half_width = hw;
   if (o->memory_budget > 0) ap.memory_budget = o->memory_budget;
-  if ((st = mgs_vdb_alpha_field(c->sub, &ap, &c->alpha, NULL, err))) return st;
+  mgs_vdb_build_info bi;
+  if (o->incremental) {
+    if (!c->acache && !(c->acache = mgs_vdb_alpha_cache_create())) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
+    st = mgs_vdb_alpha_field_cached(c->sub, &ap, c->acache, &c->alpha, &bi, err);
+  } else {
+    st = mgs_vdb_alpha_field(c->sub, &ap, &c->alpha, &bi, err);
+  }
+  if (st) return st;
+  c->r.leaves = bi.leaves;
+  c->r.leaves_reused = o->incremental ? bi.leaves_reused : 0;
   ts[0] = mgs_now() - t0;
   double t1 = mgs_now();
   mgs_vdb_sdf_params sp;
@@ -436,13 +454,13 @@ mgs_status mgs_morse_ctx_flush_csv(mgs_morse_ctx *c, mgs_error *err) {
   if (!f) return mgs_error_set(err, MGS_ERR_IO, "%s: cannot open for appending", c->csv_path);
   if (fresh)
     fprintf(f, "iteration,s_alpha,s_sdf,s_persistence,s_closest,s_components,s_total,"
-               "betti0_0,betti0_1,betti0_2,betti_eps_0,betti_eps_1,betti_eps_2,pairs,spawned,pruned,topo_loss\n");
+               "betti0_0,betti0_1,betti0_2,betti_eps_0,betti_eps_1,betti_eps_2,pairs,spawned,pruned,topo_loss,leaves,leaves_reused\n");
   for (size_t k = c->rows_flushed; k < c->n_rows; k++) {
     const morse_row *r = &c->rows[k];
-    fprintf(f, "%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d,%d,%d,%d,%zu,%zu,%zu,%.6g\n", r->iteration, r->seconds[0],
+    fprintf(f, "%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d,%d,%d,%d,%zu,%zu,%zu,%.6g,%zu,%zu\n", r->iteration, r->seconds[0],
             r->seconds[1], r->seconds[2], r->seconds[3], r->seconds[4], r->seconds[5], r->betti0[0], r->betti0[1],
             r->betti0[2], r->betti_eps[0], r->betti_eps[1], r->betti_eps[2], r->pairs, r->spawned, r->pruned,
-            isnan(r->topo) ? 0.0 : r->topo);
+            isnan(r->topo) ? 0.0 : r->topo, r->leaves, r->leaves_reused);
   }
   int ok = fclose(f) == 0;
   c->rows_flushed = c->n_rows;
@@ -451,7 +469,8 @@ mgs_status mgs_morse_ctx_flush_csv(mgs_morse_ctx *c, mgs_error *err) {
 
 /* ---- checkpoint --------------------------------------------------------------------- */
 
-#define CTX_MAGIC 0x4d4f5253u /* "MORS" */
+#define CTX_MAGIC 0x3252534fu    /* "OSR2": v2 adds the incremental lattice */
+#define CTX_MAGIC_V1 0x4d4f5253u /* "MORS" */
 
 /* The last SDF grid goes into checkpoints too: terms that read it between analyses (the
  * normal loss's ∇d) must see the same grid after --resume. OpenVDB serializes to files, so
@@ -506,7 +525,8 @@ mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   uint32_t magic = CTX_MAGIC;
   uint64_t n = c->r.n, analyses = c->analyses;
   int ok = fwrite(&magic, 4, 1, f) == 1 && fwrite(&analyses, 8, 1, f) == 1 &&
-           fwrite(&c->seconds_total, sizeof(double), 1, f) == 1;
+           fwrite(&c->seconds_total, sizeof(double), 1, f) == 1 && fwrite(&c->h_fixed, sizeof(double), 1, f) == 1 &&
+           fwrite(&c->diag_fixed, sizeof(double), 1, f) == 1;
   mgs_morse_result r = c->r;
   r.pairs = NULL;
   ok = ok && fwrite(&r, sizeof r, 1, f) == 1 && fwrite(&n, 8, 1, f) == 1;
@@ -519,9 +539,13 @@ mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   uint32_t magic = 0;
   uint64_t n = 0, analyses = 0;
   mgs_morse_result r;
-  double secs = 0;
-  if (fread(&magic, 4, 1, f) != 1 || magic != CTX_MAGIC || fread(&analyses, 8, 1, f) != 1 ||
-      fread(&secs, sizeof(double), 1, f) != 1 || fread(&r, sizeof r, 1, f) != 1 || fread(&n, 8, 1, f) != 1 || n > ((uint64_t)1 << 32))
+  double secs = 0, hf = 0, df = 0;
+  if (fread(&magic, 4, 1, f) == 1 && magic == CTX_MAGIC_V1)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the Morse analysis state was written by an older morsegs (v1); "
+                         "resume with that version or train again");
+  if (magic != CTX_MAGIC || fread(&analyses, 8, 1, f) != 1 || fread(&secs, sizeof(double), 1, f) != 1 ||
+      fread(&hf, sizeof(double), 1, f) != 1 || fread(&df, sizeof(double), 1, f) != 1 || fread(&r, sizeof r, 1, f) != 1 ||
+      fread(&n, 8, 1, f) != 1 || n > ((uint64_t)1 << 32))
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the Morse analysis state is missing or damaged");
   mgs_morse_pair *p = calloc(n ? n : 1, sizeof *p);
   if (!p) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
@@ -533,5 +557,7 @@ mgs_status mgs_morse_ctx_load(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   c->r.n = n;
   c->analyses = analyses;
   c->seconds_total = secs;
+  c->h_fixed = hf;
+  c->diag_fixed = df;
   return load_sdf(c, f, err);
 }

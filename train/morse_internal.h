@@ -12,6 +12,7 @@ typedef struct morse_row {
   int betti0[3], betti_eps[3];
   size_t pairs, spawned, pruned;
   double topo;
+  size_t leaves, leaves_reused;
 } morse_row;
 
 struct mgs_morse_ctx {
@@ -26,6 +27,9 @@ struct mgs_morse_ctx {
   mgs_topo_components *comp;   /* floaters: components of {d <= 0} */
   int *cam_count;              /* per model Gaussian */
   size_t cam_n;
+  /* incremental analyses (o.incremental) */
+  struct mgs_vdb_alpha_cache *acache;
+  double h_fixed, diag_fixed;  /* voxel size kept, and the diagonal it was set from */
   /* bookkeeping */
   size_t analyses;
   double seconds_total;

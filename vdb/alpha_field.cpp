@@ -159,10 +159,11 @@ mgs_status build(const Source &src, const mgs_vdb_alpha_params *pin, mgs_vdb_gri
     h = d / p.resolution;
   }
   info.voxel_size = h;
-  // The grid is translated to the scene centre (snapped to the voxel lattice), so index
-  // coordinates stay small for scenes far from the origin (SPEC §7: 1e5 offsets).
+  // The grid is translated to the scene centre, so index coordinates stay small for scenes
+  // far from the origin (SPEC §7: 1e5 offsets). Snapped to 64 voxels, not one: a centre that
+  // drifts as Gaussians move keeps the same lattice, so a cached build's leaves still apply.
   double shift[3];
-  for (int a = 0; a < 3; a++) shift[a] = h * std::round(0.5 * (info.scene_lo[a] + info.scene_hi[a]) / h);
+  for (int a = 0; a < 3; a++) shift[a] = 64.0 * h * std::round(0.5 * (info.scene_lo[a] + info.scene_hi[a]) / (64.0 * h));
   const double lp = (p.small == MGS_VDB_SMALL_NONE) ? 0.0 : 0.25 * h * h;  // (h/2)²
   const double max_var = diag > 0 ? diag * diag : INFINITY;
   const float k2 = (float)(p.k_sigma * p.k_sigma);

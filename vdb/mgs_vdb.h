@@ -128,7 +128,7 @@ mgs_status mgs_vdb_alpha_field_cov(size_t n, const float *mean, const float *cov
                                    mgs_vdb_grid **out, mgs_vdb_build_info *info, mgs_error *err);
 /* Incremental builds: a cache of the last build's leaves. A leaf whose Gaussians (their
  * prepared parameters, in index order) are those of the cached build, at the same voxel
- * size, lattice (the grid translation follows the means' box centre) and support, is
+ * size, lattice (the grid translation: the means' box centre snapped to 64 voxels) and support, is
  * copied; the others are computed. The result is bit-identical to mgs_vdb_alpha_field's
  * (tested). Give an absolute voxel_size so that moving Gaussians do not change it. */
 typedef struct mgs_vdb_alpha_cache mgs_vdb_alpha_cache;

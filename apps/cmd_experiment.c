@@ -354,7 +354,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     size_t n;
     if (sp && mgs_read_file(sp, &text, &n, NULL) == MGS_OK) {
       cJSON *j = cJSON_Parse(text);
-      const cJSON *t = cJSON_GetObjectItem(j, "train_seconds"), *an = cJSON_GetObjectItem(j, "analysis_seconds");
+      /* the trainer writes morse_analysis_seconds (MorseGS variants only) */
+      const cJSON *t = cJSON_GetObjectItem(j, "train_seconds"), *an = cJSON_GetObjectItem(j, "morse_analysis_seconds");
       if (cJSON_IsNumber(t)) out->train_seconds = t->valuedouble;
       if (cJSON_IsNumber(an)) out->analysis_seconds = an->valuedouble;
       cJSON_Delete(j);

@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""One table across datasets from `morsegs experiment`'s RESULTS.json: for each variant and
+hypothesis, the change against the baseline per dataset (mean over seeds) and the verdicts
+counted. Prints Markdown (the README's verdict table is this script's output).
+
+usage: scripts/experiment_summary.py DIR/RESULTS.json
+"""
+import json
+import os
+import sys
+
+HYPS = [("H1", "H1 Chamfer", "%"), ("H2", "H2 floaters (seed's count)", "%"),
+        ("H2_visible", "H2 visible floater mass", "%"), ("H3", "H3 Gaussians at equal PSNR", "%"),
+        ("H4", "H4 PSNR", "dB"), ("H4_ssim", "H4 SSIM", "")]
+
+
+def fmt(h, unit):
+    m = h.get("change_mean")
+    if m is None or h.get("verdict") in (None, "n/a"):
+        return "n/a"
+    if unit == "%":
+        return "%+.0f %%" % (100 * m)
+    if unit == "dB":
+        return "%+.2f" % m
+    return "%+.4f" % m
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    with open(sys.argv[1]) as f:
+        d = json.load(f)
+    names = [ds["name"] for ds in d["datasets"]]
+    variants = [v["name"] for v in d["variants"] if v["name"] != "baseline"]
+    print("%d of %d runs, %d iterations, %d seeds; datasets: %s.\n" % (
+        d["runs_finished"], d["runs_planned"], d["iterations"], d["seeds"], ", ".join(names)))
+    for key, title, unit in HYPS:
+        print("**%s** — change against the baseline per dataset (%s), mean over seeds; verdicts counted "
+              "(yes / partly / no / worse / n/a):\n" % (title, ", ".join(names)))
+        print("| variant | " + " | ".join(names) + " | yes | partly | no | worse | n/a |")
+        print("|---|" + "---|" * len(names) + "---|---|---|---|---|")
+        for vn in variants:
+            cells, counts = [], {"yes": 0, "partly": 0, "no": 0, "worse": 0, "n/a": 0}
+            for ds in d["datasets"]:
+                v = next((x for x in ds["variants"] if x["name"] == vn), None)
+                h = (v or {}).get("hypotheses", {}).get(key, {})
+                verdict = h.get("verdict", "n/a")
+                counts[verdict if verdict in counts else "n/a"] += 1
+                cell = fmt(h, unit)
+                if verdict in ("yes", "partly", "worse"):
+                    cell += " (%s)" % verdict
+                cells.append(cell)
+            print("| %s | %s | %d | %d | %d | %d | %d |" % (vn, " | ".join(cells), counts["yes"], counts["partly"],
+                                                           counts["no"], counts["worse"], counts["n/a"]))
+        print()
+    # topology of the final α-surface and cost, from the runs
+    print("**Topology and cost** — per dataset: seeds whose persistent Betti numbers equal the GT mesh's, "
+          "bottleneck distance to the GT diagram (mean), training seconds (mean; the Morse analyses' share of it in brackets):\n")
+    print("| variant | " + " | ".join(names) + " |")
+    print("|---|" + "---|" * len(names))
+    for vn in ["baseline"] + variants:
+        cells = []
+        for ds in d["datasets"]:
+            runs = [r for r in ds.get("runs", []) if r["variant"] == vn and r.get("iteration") == d["iterations"]]
+            if not runs:
+                cells.append("–")
+                continue
+            ok = sum(1 for r in runs if r.get("betti_persistent") == ds["gt_betti_persistent"])
+            bn = [r["bottleneck"] for r in runs if isinstance(r.get("bottleneck"), (int, float))]
+            ts = [r["train_seconds"] for r in runs if isinstance(r.get("train_seconds"), (int, float))]
+            an = []
+            for r in runs:  # the Morse analyses' share of the training time, from each run's train_stats.json
+                ts_path = os.path.join(os.path.dirname(os.path.abspath(sys.argv[1])), "runs", ds["name"], vn,
+                                       "seed_%d" % r["seed"], "train_stats.json")
+                try:
+                    with open(ts_path) as f:
+                        st = json.load(f)
+                    if st.get("morse_analysis_seconds") and st.get("train_seconds"):
+                        an.append(st["morse_analysis_seconds"] / st["train_seconds"])
+                except (OSError, ValueError):
+                    pass
+            cell = "%d/%d, %s, %s s" % (ok, len(runs), ("%.3f" % (sum(bn) / len(bn))) if bn else "inf",
+                                       ("%.0f" % (sum(ts) / len(ts))) if ts else "?")
+            if an:
+                cell += " (%.0f %%)" % (100 * sum(an) / len(an))
+            cells.append(cell)
+        print("| %s | %s |" % (vn, " | ".join(cells)))
+    print()
+
+
+if __name__ == "__main__":
+    main()

@@ -261,7 +261,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     char gname[64];
     snprintf(gname, sizeof gname, "ranks/rank_%d.ghosts", rank);
     char *side = mgs_path_join(mo->run, gname);
-    gh = side ? mgs_mpi_ghosts_create(part, rank, size, handoff, mo->exchange_every, m, side) : NULL;
+    gh = side ? mgs_mpi_ghosts_create(part, rank, size, handoff, mo->exchange_every, m, side, mo->timeout) : NULL;
     free(side);
     if (!gh) mgs_mpi_die(rank, "out of memory");
     o.after_step = mgs_mpi_ghosts_after_step;

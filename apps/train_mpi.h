@@ -26,10 +26,11 @@ void mgs_mpi_merged_vdb(const mgs_gaussians *merged, const mgs_partition *part, 
  * its block holds and receives read-only copies of the neighbours' Gaussians whose 3σ
  * support grown by `margin` (world units) reaches its tiles; every `every` iterations
  * (0: only at the hand-off) the owners send their current values. `sidecar`: where the
- * fixed layout is kept for --resume. */
+ * fixed layout is kept for --resume. An exchange that has not completed after `timeout`
+ * seconds (<= 0: 600) ends the run, naming this rank's neighbours. */
 typedef struct mgs_mpi_ghosts mgs_mpi_ghosts;
 mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
-                                      double margin, const char *sidecar);
+                                      double margin, const char *sidecar, double timeout);
 void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh);
 struct mgs_trainer;
 mgs_status mgs_mpi_ghosts_after_step(void *user, struct mgs_trainer *t, mgs_error *err);

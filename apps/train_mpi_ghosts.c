@@ -18,6 +18,7 @@
 #ifdef MGS_HAVE_MPI
 #include <math.h>
 #include <stdio.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 #include "apps/train_mpi.h"
@@ -40,12 +41,17 @@ struct mgs_mpi_ghosts {
   float *vals, *sbuf;     /* ghost rows / rows to send, [row][dims] */
   unsigned long long bytes_sent;
   long exchanges;
+  double limit;           /* seconds an exchange may take before the run is ended */
+  int explicit_limit;     /* limit came from --mpi-timeout */
+  int iteration;          /* of the exchange under way (for messages) */
 };
 
 mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
-                                      double margin, const char *sidecar) {
+                                      double margin, const char *sidecar, double timeout) {
   mgs_mpi_ghosts *gh = calloc(1, sizeof *gh);
   if (!gh) return NULL;
+  gh->limit = timeout > 0 ? timeout : 600.0;
+  gh->explicit_limit = timeout > 0;
   gh->rank = rank; gh->size = size; gh->handoff = handoff; gh->every = every;
   gh->part = part; gh->margin = margin; gh->graph = MPI_COMM_NULL;
   gh->sidecar = strdup(sidecar);
@@ -117,11 +123,48 @@ static mgs_status set_counts(mgs_mpi_ghosts *gh, mgs_error *err) {
   return MGS_OK;
 }
 
+/* sbuf -> recv through the neighbourhood, bounded in time: a neighbour that never joins
+   (hung, or gone without mpirun noticing) ends the run with the candidates named, rather
+   than a hang. */
+static void wait_bounded(mgs_mpi_ghosts *gh, MPI_Request *rqp, const char *what, int all_ranks);
+static mgs_status collective(mgs_mpi_ghosts *gh, float *recv, mgs_error *err) {
+  MPI_Request rq;
+  if (MPI_Ineighbor_alltoallv(gh->sbuf, gh->scount, gh->sdispl, MPI_FLOAT, recv, gh->rcount, gh->rdispl, MPI_FLOAT,
+                              gh->graph, &rq) != MPI_SUCCESS)
+    return mgs_error_set(err, MGS_ERR_IO, "MPI_Ineighbor_alltoallv of the ghosts failed");
+  wait_bounded(gh, &rq, "ghost exchange", 0);
+  return MGS_OK;
+}
+
+/* Waits for a non-blocking collective; past the limit, names who it waits on (the
+   neighbours, or every other rank for a collective over all of them) and ends the run. */
+static void wait_bounded(mgs_mpi_ghosts *gh, MPI_Request *rqp, const char *what, int all_ranks) {
+  MPI_Request rq = *rqp;
+  double t0 = MPI_Wtime();
+  for (long spin = 0;; spin++) {
+    int done = 0;
+    MPI_Test(&rq, &done, MPI_STATUS_IGNORE);
+    if (done) { *rqp = rq; return; }
+    if (MPI_Wtime() - t0 > gh->limit) break;
+    if (spin > 1000) { struct timespec ts = {0, 1000000}; nanosleep(&ts, NULL); } /* long waits: 1 ms naps */
+  }
+  char msg[1024];
+  size_t len = (size_t)snprintf(msg, sizeof msg, "the %s after iteration %d did not complete within %.0f s%s: "
+                                "no data from %s", what, gh->iteration, gh->limit,
+                                gh->explicit_limit ? " (--mpi-timeout)" : " (600 s; --mpi-timeout S sets it)",
+                                all_ranks ? "one of ranks" : "neighbour rank(s)");
+  for (int i = 0, named = 0; i < (all_ranks ? gh->size : gh->n_nb) && len < sizeof msg - 16; i++) {
+    int q = all_ranks ? i : gh->nb[i];
+    if (q != gh->rank) len += (size_t)snprintf(msg + len, sizeof msg - len, "%s %d", named++ ? "," : "", q);
+  }
+  snprintf(msg + len, sizeof msg - len, "; the run is ended");
+  mgs_mpi_die(gh->rank, msg);
+}
+
 static mgs_status exchange(mgs_mpi_ghosts *gh, const mgs_gaussians *g, mgs_error *err) {
   pack_rows(g, gh->exp, gh->n_exp, gh->dims, gh->sbuf);
-  if (MPI_Neighbor_alltoallv(gh->sbuf, gh->scount, gh->sdispl, MPI_FLOAT, gh->vals, gh->rcount, gh->rdispl, MPI_FLOAT,
-                             gh->graph) != MPI_SUCCESS)
-    return mgs_error_set(err, MGS_ERR_IO, "MPI_Neighbor_alltoallv of the ghosts failed");
+  mgs_status st = collective(gh, gh->vals, err);
+  if (st) return st;
   gh->bytes_sent += (unsigned long long)gh->n_exp * (unsigned long long)gh->dims * sizeof(float);
   gh->exchanges++;
   return MGS_OK;
@@ -199,9 +242,12 @@ static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
   }
   /* every rank must reach the collectives below, also one that failed above */
   int bad = st != MGS_OK, any_bad = 0;
-  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Request rq;
+  MPI_Iallreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD, &rq);
+  wait_bounded(gh, &rq, "hand-off", 1);
   if (any_bad) { if (!st) st = mgs_error_set(err, MGS_ERR_IO, "another rank failed at the hand-off"); goto done; }
-  MPI_Alltoall(sendn, 1, MPI_INT, recvn, 1, MPI_INT, MPI_COMM_WORLD);
+  MPI_Ialltoall(sendn, 1, MPI_INT, recvn, 1, MPI_INT, MPI_COMM_WORLD, &rq);
+  wait_bounded(gh, &rq, "hand-off", 1);
   gh->nb = malloc((size_t)size * sizeof(int)); gh->srows = malloc((size_t)size * sizeof(int));
   gh->rrows = malloc((size_t)size * sizeof(int));
   size_t total = 0;
@@ -228,9 +274,20 @@ done:
   return st;
 }
 
+/* Test hook (as cmd_train_mpi.c's): MGS_MPI_FAULT=hang-at:K:N makes rank K stop answering
+   after iteration N (alive, so mpirun does not notice). */
+static void fault_hang(int rank, int it) {
+  const char *f = getenv("MGS_MPI_FAULT");
+  int k = -1, n = 0;
+  if (f && sscanf(f, "hang-at:%d:%d", &k, &n) == 2 && k == rank && n == it)
+    for (;;) { struct timespec ts = {1, 0}; nanosleep(&ts, NULL); }
+}
+
 mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err) {
   mgs_mpi_ghosts *gh = user;
   int it = mgs_trainer_iteration(t);
+  gh->iteration = it;
+  fault_hang(gh->rank, it);
   if (!gh->active) return it == gh->handoff ? handoff(gh, t, err) : MGS_OK;
   if (gh->every > 0 && (it - gh->handoff) % gh->every == 0) {
     mgs_status st = exchange(gh, mgs_trainer_model(t), err);
@@ -291,15 +348,13 @@ bad:
 mgs_status mgs_mpi_ghosts_lag(mgs_mpi_ghosts *gh, const mgs_trainer *t, double *lag, mgs_error *err) {
   *lag = 0;
   if (!gh->active) return MGS_OK;
+  gh->iteration = mgs_trainer_iteration(t);
   size_t nv = gh->n_ghost * (size_t)gh->dims;
   float *now = malloc((nv ? nv : 1) * sizeof(float));
   if (!now) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
   pack_rows(mgs_trainer_model(t), gh->exp, gh->n_exp, gh->dims, gh->sbuf);
-  if (MPI_Neighbor_alltoallv(gh->sbuf, gh->scount, gh->sdispl, MPI_FLOAT, now, gh->rcount, gh->rdispl, MPI_FLOAT,
-                             gh->graph) != MPI_SUCCESS) {
-    free(now);
-    return mgs_error_set(err, MGS_ERR_IO, "MPI_Neighbor_alltoallv of the ghosts failed");
-  }
+  mgs_status st = collective(gh, now, err);
+  if (st) { free(now); return st; }
   const mgs_gaussians *g = mgs_trainer_model(t);
   size_t off = 0;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) {

@@ -328,6 +328,20 @@ static void test_ghosts(void) {
   snprintf(pa, sizeof pa, "%s/point_cloud/iteration_60/point_cloud.ply", ref);
   snprintf(pb, sizeof pb, "%s/point_cloud/iteration_60/point_cloud.ply", cut);
   CHECK_MSG(same_file(pa, pb), "resumed past the hand-off: differs from the uninterrupted run (%s, %s)", pa, pb);
+  /* a rank that stops answering (alive: mpirun sees nothing) at an exchange, and at the
+     hand-off: the others name it after --mpi-timeout instead of waiting for ever */
+  const char *faults[2] = {"hang-at:1:40", "hang-at:1:29"}, *what[2] = {"ghost exchange after iteration 40", "hand-off after iteration 30"};
+  for (int k = 0; k < 2; k++) {
+    snprintf(run, sizeof run, "%s/ghosts_hang", root);
+    setenv("MGS_MPI_FAULT", faults[k], 1);
+    rc = sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 5 --force --quiet --mpi-timeout 3", data, run, -2);
+    unsetenv("MGS_MPI_FAULT");
+    log = slurp(logp);
+    CHECK_MSG(rc != 0 && rc != 124, "%s: exit %d (124: hung)", faults[k], rc);
+    CHECK_MSG(log && strstr(log, what[k]) && strstr(log, "within 3 s") && strstr(log, " 1; the run is ended"), "%s: log: %s",
+              faults[k], log ? log : "");
+    free(log);
+  }
 }
 
 /* `morsegs bench mpi` end to end at a toy size: it runs, and its table has a row per model

@@ -3,7 +3,9 @@
 hypothesis, the change against the baseline per dataset (mean over seeds) and the verdicts
 counted. Prints Markdown (the README's verdict table is this script's output).
 
-usage: scripts/experiment_summary.py DIR/RESULTS.json
+usage: scripts/experiment_summary.py [--compact] DIR/RESULTS.json
+  --compact: one row per variant, one cell per hypothesis (verdict counts over the datasets
+  and the range of the mean changes), printed before the per-dataset tables.
 """
 import json
 import os
@@ -25,15 +27,52 @@ def fmt(h, unit):
     return "%+.4f" % m
 
 
+def compact(d, variants):
+    """One row per variant, one cell per hypothesis: the verdicts over the datasets and the
+    range of the mean changes."""
+    print("| variant | " + " | ".join(t for _, t, _ in HYPS) + " |")
+    print("|---|" + "---|" * len(HYPS))
+    for vn in variants:
+        cells = []
+        for key, _, unit in HYPS:
+            verdicts, changes = [], []
+            for ds in d["datasets"]:
+                v = next((x for x in ds["variants"] if x["name"] == vn), None)
+                h = (v or {}).get("hypotheses", {}).get(key, {})
+                verdicts.append(h.get("verdict", "n/a"))
+                if h.get("verdict") not in (None, "n/a") and h.get("change_mean") is not None:
+                    changes.append(h["change_mean"])
+            parts = ["%d %s" % (verdicts.count(k), k) for k in ("yes", "partly", "worse") if verdicts.count(k)]
+            if not parts:
+                parts = ["no" if verdicts.count("no") else "n/a"]
+            rng = ""
+            if changes:
+                lo, hi = min(changes), max(changes)
+                if unit == "%":
+                    rng = " (%+.0f … %+.0f %%)" % (100 * lo, 100 * hi)
+                elif unit == "dB":
+                    rng = " (%+.2f … %+.2f dB)" % (lo, hi)
+                else:
+                    rng = " (%+.4f … %+.4f)" % (lo, hi)
+            cells.append(", ".join(parts) + rng)
+        print("| %s | %s |" % (vn, " | ".join(cells)))
+    print()
+
+
 def main():
-    if len(sys.argv) != 2:
+    want_compact = "--compact" in sys.argv[1:]
+    args = [a for a in sys.argv[1:] if a != "--compact"]
+    if len(args) != 1:
         sys.exit(__doc__)
-    with open(sys.argv[1]) as f:
+    sys.argv = [sys.argv[0]] + args  # the run folders are found next to RESULTS.json
+    with open(args[0]) as f:
         d = json.load(f)
     names = [ds["name"] for ds in d["datasets"]]
     variants = [v["name"] for v in d["variants"] if v["name"] != "baseline"]
     print("%d of %d runs, %d iterations, %d seeds; datasets: %s.\n" % (
         d["runs_finished"], d["runs_planned"], d["iterations"], d["seeds"], ", ".join(names)))
+    if want_compact:
+        compact(d, variants)
     for key, title, unit in HYPS:
         print("**%s** — change against the baseline per dataset (%s), mean over seeds; verdicts counted "
               "(yes / partly / no / worse / n/a):\n" % (title, ", ".join(names)))

@@ -74,7 +74,8 @@ typedef struct mgs_morse_options {
   /* Large scenes: 1 keeps the voxel size while the analysed box's diagonal stays within
      10 % of the one it was set from, and builds the α-field incrementally (leaves whose
      Gaussians did not change since the last analysis are copied, bit-identical to a
-     full build: vdb's alpha cache); the SDF and the persistence are still computed whole.
+     full build: vdb's alpha cache) and the SDF band only around the α leaves that changed
+     (vdb's SDF cache, also bit-identical); the persistence is still computed whole.
      0 (default): every analysis from scratch at diagonal / resolution. */
   int incremental;
 } mgs_morse_options;
@@ -108,6 +109,7 @@ typedef struct mgs_morse_result {
   double seconds[6];      /* alpha, sdf, persistence, closest points, components, total */
   size_t active_voxels;
   size_t leaves, leaves_reused; /* the α-field's 8³ leaves; copied from the last analysis */
+  size_t sdf_leaves, sdf_leaves_reused; /* the SDF band's leaves; copied from the last analysis (incremental) */
 } mgs_morse_result;
 
 typedef struct mgs_morse_ctx mgs_morse_ctx;

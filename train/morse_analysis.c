@@ -101,6 +101,7 @@ void mgs_morse_ctx_unref(mgs_morse_ctx *c) {
   if (!c || --c->refs > 0) return;
   drop_transient(c);
   mgs_vdb_alpha_cache_destroy(c->acache);
+  mgs_vdb_sdf_cache_destroy(c->scache);
   free(c->r.pairs);
   free(c->rows);
   free(c->csv_path);
@@ -335,7 +336,16 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
   mgs_vdb_sdf_params sp;
   mgs_vdb_sdf_params_default(&sp);
   sp.tau = o->tau; sp.half_width = hw; sp.method = o->sdf_method;
-  if ((st = mgs_vdb_sdf_from_alpha(c->alpha, &sp, &c->sdf, err))) return st;
+  if (o->incremental) {
+    /* the band is computed again only around the α leaves that changed (bit-identical) */
+    mgs_vdb_sdf_update_info si;
+    if (!c->scache && !(c->scache = mgs_vdb_sdf_cache_create())) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
+    if ((st = mgs_vdb_sdf_from_alpha_cached(c->alpha, &sp, c->scache, &c->sdf, &si, err))) return st;
+    c->r.sdf_leaves = si.leaves_total;
+    c->r.sdf_leaves_reused = si.whole ? 0 : si.leaves_total - si.leaves_recomputed;
+  } else if ((st = mgs_vdb_sdf_from_alpha(c->alpha, &sp, &c->sdf, err))) {
+    return st;
+  }
   c->r.active_voxels = mgs_vdb_grid_active_voxel_count(c->sdf);
   ts[1] = mgs_now() - t1;
 

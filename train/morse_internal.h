@@ -29,6 +29,7 @@ struct mgs_morse_ctx {
   size_t cam_n;
   /* incremental analyses (o.incremental) */
   struct mgs_vdb_alpha_cache *acache;
+  struct mgs_vdb_sdf_cache *scache;
   double h_fixed, diag_fixed;  /* voxel size kept, and the diagonal it was set from */
   /* bookkeeping */
   size_t analyses;

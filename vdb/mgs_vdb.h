@@ -173,6 +173,26 @@ void mgs_vdb_sdf_params_default(mgs_vdb_sdf_params *p);
  * half-width w voxels, background w·h, interior filled with inactive -w·h tiles. */
 mgs_status mgs_vdb_sdf_from_alpha(const mgs_vdb_grid *alpha, const mgs_vdb_sdf_params *p,
                                   mgs_vdb_grid **out, mgs_error *err);
+
+/* Incremental SDF (CLOSEST and SWEEP; MESH and empty fields are built whole): the cache
+ * keeps the last build's α-field (shared, so it must not be changed afterwards) and band.
+ * On the same lattice, τ and band, the leaves where the new α-field differs from the cached
+ * one, grown by the distance over which an SDF value depends on α (2w + 8 voxels), are
+ * computed again from a crop of the field with the same margin once more; every other leaf
+ * is copied. The grid equals mgs_vdb_sdf_from_alpha's voxel for voxel
+ * (tests/vdb/test_vdb_sdf_cache). When the region to redo is over half the grid, the whole
+ * is built (whole = 1). */
+typedef struct mgs_vdb_sdf_cache mgs_vdb_sdf_cache;
+typedef struct mgs_vdb_sdf_update_info {
+  int whole;                 /* built from scratch */
+  size_t leaves_changed;     /* α leaves that differ from the cached field */
+  size_t leaves_recomputed;  /* band leaves computed again */
+  size_t leaves_total;       /* band leaves of the previous build */
+} mgs_vdb_sdf_update_info;
+mgs_vdb_sdf_cache *mgs_vdb_sdf_cache_create(void);
+void mgs_vdb_sdf_cache_destroy(mgs_vdb_sdf_cache *c);
+mgs_status mgs_vdb_sdf_from_alpha_cached(const mgs_vdb_grid *alpha, const mgs_vdb_sdf_params *p, mgs_vdb_sdf_cache *cache,
+                                         mgs_vdb_grid **out, mgs_vdb_sdf_update_info *info, mgs_error *err);
 /* FOG grid named "density": the α-field clamped to [0,1]. */
 mgs_status mgs_vdb_density_from_alpha(const mgs_vdb_grid *alpha, mgs_vdb_grid **out,
                                       mgs_error *err);

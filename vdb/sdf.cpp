@@ -41,6 +41,7 @@
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <atomic>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -151,6 +152,34 @@ FloatGrid::Ptr sdf_sweep(const FloatGrid &alpha, float tau, int w) {
   auto g = tools::fogToSdf(*dom, tau, 1);
   if (!g) return empty_level_set(alpha, bg);
   trim_band(*g, bg);
+  return g;
+}
+
+// SWEEP's band before the background change and pruning (for the incremental build): the
+// sweep's leaves with |d| clamped to the band; null if the sweep found no surface or left
+// tiles (then only a whole build is used).
+FloatTree::Ptr sdf_sweep_raw(const FloatGrid &alpha, float tau, int w) {
+  const float bg = (float)(w * alpha.voxelSize()[0]);
+  auto dom = alpha.deepCopy();
+  tools::dilateActiveValues(dom->tree(), w + 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
+  auto g = tools::fogToSdf(*dom, tau, 1);
+  if (!g || g->tree().activeTileCount() > 0) return nullptr;
+  for (auto it = g->tree().beginValueOn(); it; ++it) {
+    const float d = *it;
+    if (d >= bg) it.setValueOff(), it.setValue(bg);
+    else if (d <= -bg) it.setValueOff(), it.setValue(-bg);
+  }
+  // only the leaves carry the band; the tiles above them are made again by the finish
+  auto raw = std::make_shared<FloatTree>(g->tree().background());
+  for (auto l = g->tree().cbeginLeaf(); l; ++l) raw->addLeaf(new FloatTree::LeafNodeType(*l));
+  return raw;
+}
+
+FloatGrid::Ptr sdf_sweep_finish(FloatTree::Ptr raw, const FloatGrid &alpha, float bg) {
+  auto g = FloatGrid::create(raw);
+  g->setTransform(alpha.transform().copy());
+  tools::changeLevelSetBackground(g->tree(), bg);
+  tools::pruneLevelSet(g->tree());
   return g;
 }
 
@@ -293,7 +322,9 @@ template <class Tree, class F> void for_each_on(Tree &m, const F &f) {
   });
 }
 
-FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
+// The band's leaves, trimmed, before the flood fill of the tiles above them and pruning
+// (sdf_finish): the incremental build (sdf_update) splices these.
+FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   const FloatTree &at = alpha.tree();
   const float bg = (float)(w * alpha.voxelSize()[0]);
   const float h = (float)alpha.voxelSize()[0];
@@ -550,18 +581,108 @@ FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) {
       else v.setValue(d);
     }
   });
-  auto g = FloatGrid::create(dist_ptr);
-  g->setTransform(alpha.transform().copy());
-  tools::signedFloodFill(g->tree(), true, 1, /*minLevel: above the leaves*/ 1);
-  tools::pruneLevelSet(g->tree());
   if (fallback) mgs_debug("sdf (closest): %zu seed voxels kept an edge crossing (no iteration converged)", (size_t)fallback);
   mgs_debug("sdf (closest): masks %.3f s, %zu seeds %.3f s, rings %.3f s, relaxation %.3f s (%zu sweeps, %zu voxels "
             "moved), trim %.3f s (%zu band voxels)", t1 - t0, (size_t)seeds.activeVoxelCount(), t2 - t1, t3 - t2, t4 - t3,
-            sweeps, moved, mgs_now() - t4, (size_t)g->activeVoxelCount());
+            sweeps, moved, mgs_now() - t4, (size_t)dist.activeVoxelCount());
+  return dist_ptr;
+}
+
+// The raw band (taken over) -> the level set: tiles above the leaves signed by flood fill
+// from the leaves' corner values, then pruned.
+FloatGrid::Ptr sdf_finish(FloatTree::Ptr raw, const FloatGrid &alpha) {
+  auto g = FloatGrid::create(raw);
+  g->setTransform(alpha.transform().copy());
+  tools::signedFloodFill(g->tree(), true, 1, /*minLevel: above the leaves*/ 1);
+  tools::pruneLevelSet(g->tree());
   return g;
 }
 
+FloatGrid::Ptr sdf_closest(const FloatGrid &alpha, float tau, int w) { return sdf_finish(sdf_closest_raw(alpha, tau, w), alpha); }
+
+bool exceeds(const FloatGrid &a, float tau) {
+  for (auto it = a.tree().cbeginValueOn(); it; ++it)
+    if (*it > tau) return true;
+  return false;
+}
+
+inline Coord leaf_key(const Coord &origin) { return Coord(origin[0] >> 3, origin[1] >> 3, origin[2] >> 3); }
+
+// The raw band (CLOSEST's, or SWEEP's) of `alpha` from the last build's (prev_alpha -> prev_raw) on the same lattice:
+// the leaves where the two α-fields differ (D), grown by `reach` voxels (U), are computed
+// again from a crop of `alpha` grown by `reach` once more; every other leaf is copied. A
+// voxel's value depends on α within reach = 2w + 8 voxels: its closest point lies within w,
+// Chopp's iteration reads the 27 voxels around it, the rings hand points on one voxel at a
+// time, and a relaxation chain only moves a point to voxels within their own distance of it
+// (at most w), so w + w + a few; a sweep's value is the length of an upwind path from the
+// interface, and a path longer than w ends beyond the band. The result is the leaves of a whole build, bit for bit
+// (tests/vdb/test_vdb_sdf_cache), while that bound holds. Returns null when so much changed
+// that a whole build is cheaper.
+FloatTree::Ptr sdf_raw(const FloatGrid &alpha, float tau, int w, bool sweep) {
+  return sweep ? sdf_sweep_raw(alpha, tau, w) : sdf_closest_raw(alpha, tau, w);
+}
+
+FloatTree::Ptr sdf_update(const FloatGrid &alpha, float tau, int w, bool sweep, const FloatGrid &prev_alpha,
+                          const FloatTree &prev_raw, mgs_vdb_sdf_update_info &info) {
+  const FloatTree &at = alpha.tree(), &pt = prev_alpha.tree();
+  MaskTree changed(false);  // leaf keys (origin / 8)
+  for (auto l = at.cbeginLeaf(); l; ++l) {
+    const auto *p = pt.probeConstLeaf(l->origin());
+    if (!p || p->getValueMask() != l->getValueMask() ||
+        std::memcmp(p->buffer().data(), l->buffer().data(), FloatTree::LeafNodeType::SIZE * sizeof(float)))
+      changed.setValueOn(leaf_key(l->origin()));
+  }
+  for (auto l = pt.cbeginLeaf(); l; ++l)
+    if (!at.probeConstLeaf(l->origin())) changed.setValueOn(leaf_key(l->origin()));
+  info.leaves_changed = (size_t)changed.activeVoxelCount();
+  info.leaves_total = (size_t)prev_raw.leafCount();
+  if (!info.leaves_changed) {
+    info.leaves_recomputed = 0;
+    return std::make_shared<FloatTree>(prev_raw);
+  }
+  const int reach = 2 * w + 8, grow = (reach + 7) / 8;  // in leaves
+  MaskTree redo(changed);
+  tools::dilateActiveValues(redo, grow, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
+  redo.voxelizeActiveTiles();
+  MaskTree crop_keys(redo);
+  tools::dilateActiveValues(crop_keys, grow, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
+  crop_keys.voxelizeActiveTiles();
+  size_t redo_band = 0;
+  tree::ValueAccessor<const MaskTree> ra(redo);
+  for (auto l = prev_raw.cbeginLeaf(); l; ++l) redo_band += ra.isValueOn(leaf_key(l->origin()));
+  info.leaves_recomputed = redo_band;
+  auto crop = FloatGrid::create(at.background());
+  crop->setTransform(alpha.transform().copy());
+  size_t cropped = 0;
+  for (auto k = crop_keys.cbeginValueOn(); k; ++k) {
+    const Coord c = k.getCoord();
+    const auto *l = at.probeConstLeaf(Coord(c[0] * 8, c[1] * 8, c[2] * 8));
+    if (l) crop->tree().addLeaf(new FloatTree::LeafNodeType(*l)), cropped++;
+  }
+  if (cropped > at.leafCount() * 3 / 4) return nullptr;  // the crop is most of the field: build it whole
+  auto out = std::make_shared<FloatTree>(prev_raw.background());
+  for (auto l = prev_raw.cbeginLeaf(); l; ++l)
+    if (!ra.isValueOn(leaf_key(l->origin()))) out->addLeaf(new FloatTree::LeafNodeType(*l));
+  if (exceeds(*crop, tau)) {
+    FloatTree::Ptr part = sdf_raw(*crop, tau, w, sweep);
+    if (!part) return nullptr;
+    for (auto l = part->cbeginLeaf(); l; ++l)
+      if (ra.isValueOn(leaf_key(l->origin()))) out->addLeaf(new FloatTree::LeafNodeType(*l));
+  }
+  return out;
+}
+
 }  // namespace
+
+// The last build of mgs_vdb_sdf_from_alpha_cached: its α-field (shared, never written) and
+// raw band, and the parameters they were made with.
+struct mgs_vdb_sdf_cache {
+  FloatGrid::Ptr alpha;
+  FloatTree::Ptr raw;
+  float tau = 0;
+  int w = 0;
+  bool sweep = false;
+};
 
 extern "C" void mgs_vdb_sdf_params_default(mgs_vdb_sdf_params *p) {
   p->tau = 0.5;
@@ -619,4 +740,58 @@ extern "C" mgs_status mgs_vdb_density_from_alpha(const mgs_vdb_grid *alpha, mgs_
     return mgs_error_set(err, MGS_ERR_NOMEM, "density: %s", e.what());
   }
   return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "density: out of memory");
+}
+
+extern "C" mgs_vdb_sdf_cache *mgs_vdb_sdf_cache_create(void) { return new (std::nothrow) mgs_vdb_sdf_cache(); }
+extern "C" void mgs_vdb_sdf_cache_destroy(mgs_vdb_sdf_cache *c) { delete c; }
+
+extern "C" mgs_status mgs_vdb_sdf_from_alpha_cached(const mgs_vdb_grid *alpha, const mgs_vdb_sdf_params *pin,
+                                                    mgs_vdb_sdf_cache *cache, mgs_vdb_grid **out,
+                                                    mgs_vdb_sdf_update_info *info, mgs_error *err) {
+  if (out) *out = nullptr;
+  if (!alpha || !out) return mgs_error_set(err, MGS_ERR_ARG, "sdf: null argument");
+  if (!cache) return mgs_error_set(err, MGS_ERR_ARG, "sdf: no cache");
+  mgs_vdb_sdf_params p;
+  if (pin) p = *pin; else mgs_vdb_sdf_params_default(&p);
+  mgs_vdb_sdf_update_info local{};
+  mgs_vdb_sdf_update_info &in = info ? *info : local;
+  in = mgs_vdb_sdf_update_info{};
+  in.whole = 1;
+  const FloatGrid &a = *alpha->grid;
+  const bool sweep = p.method == MGS_VDB_SDF_SWEEP;
+  if (p.method == MGS_VDB_SDF_MESH || !(p.tau > 0) || p.half_width < 1 || p.half_width > 1000 ||
+      a.tree().activeTileCount() > 0 || !exceeds(a, (float)p.tau)) {
+    cache->alpha.reset();
+    cache->raw.reset();
+    return mgs_vdb_sdf_from_alpha(alpha, &p, out, err);
+  }
+  try {
+    FloatTree::Ptr raw;
+    const bool same = cache->alpha && cache->raw && cache->tau == (float)p.tau && cache->w == p.half_width && cache->sweep == sweep &&
+                      cache->alpha->transform() == a.transform() && cache->alpha->background() == a.background() &&
+                      cache->alpha->tree().activeTileCount() == 0;
+    if (same) raw = sdf_update(a, (float)p.tau, p.half_width, sweep, *cache->alpha, *cache->raw, in);
+    if (raw) in.whole = 0;
+    else if ((raw = sdf_raw(a, (float)p.tau, p.half_width, sweep))) in.leaves_recomputed = in.leaves_total = raw->leafCount();
+    if (!raw) {  // the sweep left tiles: built whole, nothing cached
+      cache->alpha.reset();
+      cache->raw.reset();
+      return mgs_vdb_sdf_from_alpha(alpha, &p, out, err);
+    }
+    cache->alpha = alpha->grid;
+    cache->raw = raw;
+    cache->tau = (float)p.tau;
+    cache->w = p.half_width;
+    cache->sweep = sweep;
+    FloatGrid::Ptr g = sweep ? sdf_sweep_finish(std::make_shared<FloatTree>(*raw), a, (float)(p.half_width * a.voxelSize()[0]))
+                             : sdf_finish(std::make_shared<FloatTree>(*raw), a);
+    g->setName("sdf");
+    g->setGridClass(GRID_LEVEL_SET);
+    *out = mgs_vdb_detail::wrap(g);
+  } catch (const std::exception &e) {
+    cache->alpha.reset();
+    cache->raw.reset();
+    return mgs_error_set(err, MGS_ERR_NOMEM, "sdf: %s", e.what());
+  }
+  return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "sdf: out of memory");
 }

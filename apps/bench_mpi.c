@@ -273,7 +273,7 @@ int mgs_bench_mpi(int argc, char **argv) {
     if (run(cmd)) { fprintf(stderr, "morsegs bench mpi: the single-process run failed (see %s.log)\n", rs); rc = 1; break; }
     double wall_s = mgs_now() - t0;
     mgs_partition *part = NULL;
-    if (mgs_partition_build(ds->init_points->xyz, ds->init_points->n, K, 0, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
+    if (mgs_partition_for_dataset(ds, K, 1, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
     char pb[2][9000], ps[4600];
     for (int x = 0; x < 2; x++) snprintf(pb[x], sizeof pb[x], "%s/point_cloud/iteration_%d/point_cloud.ply", rb[x], iters);
     snprintf(ps, sizeof ps, "%s/point_cloud/iteration_%d/point_cloud.ply", rs, K * iters);

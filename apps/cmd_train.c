@@ -98,7 +98,9 @@ static void usage(FILE *f) {
     "                          --checkpoint-every, --resume and --force per rank: RUN/ranks/rank_K.mgsckpt;\n"
     "                          --vdb-resolution R: the merged point_cloud.vdb, built by blocks;\n"
     "                          --densify-until N: hand-off there, then read-only ghosts refreshed every\n"
-    "                          --exchange-every K steps (100); --independent: no hand-off)\n"
+    "                          --exchange-every K steps (100); --independent: no hand-off;\n"
+    "                          --split-by pixels|points: blocks of equal points + pixels that see them\n"
+    "                          (default) or of equal points)\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

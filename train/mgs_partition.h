@@ -1,7 +1,8 @@
 /* Spatial partition of a scene into blocks for distributed training (train/partition.c):
  * tiles (cubes of a fixed side, as the visibility's) ordered along a Morton space-filling
- * curve, cut into `ranks` contiguous runs of about equal cost (the Gaussians in them), so
- * each block is compact in space. A point belongs to the block whose run holds its tile's
+ * curve, cut into `ranks` contiguous runs of about equal cost (by default the points in
+ * them; with costs, the sum of the points' costs, e.g. mgs_partition_pixel_costs), so each
+ * block is compact in space. A point belongs to the block whose run holds its tile's
  * curve position (every point of space has exactly one owner, also points born later
  * outside the initial tiles). Pure computation: the same input gives the same partition
  * on every rank, so none is sent. */
@@ -22,12 +23,29 @@ typedef struct mgs_partition {
   uint64_t *split;        /* ranks + 1 curve positions: rank r owns [split[r], split[r+1]) */
   double (*lo)[3], (*hi)[3]; /* per rank: box of its tiles that held points (empty: lo > hi) */
   size_t *count;          /* per rank: points owned at build time */
+  double *cost;           /* per rank: their summed cost (= count without costs) */
 } mgs_partition;
+
+struct mgs_camera;
+struct mgs_dataset;
 
 /* tile <= 0: chosen as the visibility's automatic side (~256 points a tile). Errors:
  * ranks < 1, no finite point. */
 mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double tile, mgs_partition **out, mgs_error *err);
+/* The same, each point weighted by cost[i] >= 0 (NULL: 1 each; all 0: by count). */
+mgs_status mgs_partition_build_weighted(const float *xyz, const double *cost, size_t n, int ranks, double tile,
+                                        mgs_partition **out, mgs_error *err);
 void mgs_partition_destroy(mgs_partition *p);
+/* A training iteration costs per Gaussian (projection, sorting, Adam) and per pixel
+ * (blending): cost[i] = 1/N + p_i/P, half the total for the points and half for the pixels,
+ * where p_i shares each view's pixels equally among the points that project into it (no
+ * occlusion) and P is every view's pixels. No view sees anything: 1/N each. */
+mgs_status mgs_partition_pixel_costs(const float *xyz, size_t n, const struct mgs_camera *cams, size_t n_cams, double *cost,
+                                     mgs_error *err);
+/* The partition distributed training uses: the dataset's initial points, by points only
+ * (by_pixels = 0) or by mgs_partition_pixel_costs over its training views. Every rank
+ * computes the same. */
+mgs_status mgs_partition_for_dataset(const struct mgs_dataset *ds, int ranks, int by_pixels, mgs_partition **out, mgs_error *err);
 /* The owner of a point (non-finite coordinates: rank 0). */
 int mgs_partition_owner(const mgs_partition *p, const float xyz[3]);
 

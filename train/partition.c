@@ -3,6 +3,8 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/mgs_camera.h"
+#include "core/mgs_dataset.h"
 #include "train/mgs_partition.h"
 
 #define BITS 21
@@ -36,18 +38,25 @@ static uint64_t curve_pos(const float p[3], double inv, const double t0[3]) {
   return spread3(c[0]) | spread3(c[1]) << 1 | spread3(c[2]) << 2;
 }
 
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return x < y ? -1 : (x > y);
-}
-
 void mgs_partition_destroy(mgs_partition *p) {
   if (!p) return;
-  free(p->split); free(p->lo); free(p->hi); free(p->count);
+  free(p->split); free(p->lo); free(p->hi); free(p->count); free(p->cost);
   free(p);
 }
 
+typedef struct { uint64_t key; double w; } weighted_key;
+
+static int cmp_weighted(const void *a, const void *b) {
+  const weighted_key *x = a, *y = b;
+  return x->key < y->key ? -1 : (x->key > y->key);
+}
+
 mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double tile, mgs_partition **out, mgs_error *err) {
+  return mgs_partition_build_weighted(xyz, NULL, n, ranks, tile, out, err);
+}
+
+mgs_status mgs_partition_build_weighted(const float *xyz, const double *cost, size_t n, int ranks, double tile,
+                                        mgs_partition **out, mgs_error *err) {
   *out = NULL;
   if (ranks < 1 || ranks > 1 << 20) return mgs_error_set(err, MGS_ERR_ARG, "partition: %d ranks", ranks);
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -66,15 +75,19 @@ mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double til
     tile = cbrt(vol * 256.0 / (double)nf);
     if (!(tile > 1e-9) || !isfinite(tile)) tile = 1.0;
   }
+  if (cost)
+    for (size_t i = 0; i < n; i++)
+      if (!(cost[i] >= 0) || !isfinite(cost[i])) return mgs_error_set(err, MGS_ERR_ARG, "partition: cost %g of point %zu", cost[i], i);
   mgs_partition *p = calloc(1, sizeof *p);
-  uint64_t *keys = malloc((nf ? nf : 1) * sizeof *keys);
+  weighted_key *keys = malloc((nf ? nf : 1) * sizeof *keys);
   if (p) {
     p->split = calloc((size_t)ranks + 1, sizeof *p->split);
     p->lo = calloc((size_t)ranks, sizeof *p->lo);
     p->hi = calloc((size_t)ranks, sizeof *p->hi);
     p->count = calloc((size_t)ranks, sizeof *p->count);
+    p->cost = calloc((size_t)ranks, sizeof *p->cost);
   }
-  if (!p || !keys || !p->split || !p->lo || !p->hi || !p->count) {
+  if (!p || !keys || !p->split || !p->lo || !p->hi || !p->count || !p->cost) {
     free(keys);
     mgs_partition_destroy(p);
     return mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu points", n);
@@ -88,17 +101,29 @@ mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double til
     p->t0[k] = a - floor(0.5 * (pow2 - nt));
   }
   size_t m = 0;
+  double total = 0;
   for (size_t i = 0; i < n; i++) {
     const float *q = xyz + 3 * i;
-    if (isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2])) keys[m++] = curve_pos(q, inv, p->t0);
+    if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2])) continue;
+    keys[m].key = curve_pos(q, inv, p->t0);
+    keys[m].w = cost ? cost[i] : 1.0;
+    total += keys[m++].w;
   }
-  qsort(keys, m, sizeof *keys, cmp_u64);
-  /* cut at the r/ranks quantiles, moved to the next tile boundary (a tile is never split) */
+  qsort(keys, m, sizeof *keys, cmp_weighted);
+  /* cut where the running cost reaches r/ranks of the total, moved to the next tile
+     boundary (a tile is never split); no cost at all: by count */
+  if (!(total > 0)) {
+    for (size_t j = 0; j < m; j++) keys[j].w = 1.0;
+    total = (double)m;
+  }
   p->split[0] = 0;
+  size_t j = 0;
+  double run = 0;
   for (int r = 1; r < ranks; r++) {
-    size_t j = m * (size_t)r / (size_t)ranks;
-    while (j > 0 && j < m && keys[j] == keys[j - 1]) j++;
-    uint64_t s = j < m ? keys[j] : UINT64_MAX;
+    double target = total * (double)r / (double)ranks;
+    while (j < m && run + keys[j].w <= target) run += keys[j++].w;
+    while (j > 0 && j < m && keys[j].key == keys[j - 1].key) run += keys[j++].w;
+    uint64_t s = j < m ? keys[j].key : UINT64_MAX;
     p->split[r] = s > p->split[r - 1] ? s : p->split[r - 1];
   }
   p->split[ranks] = UINT64_MAX;
@@ -110,6 +135,7 @@ mgs_status mgs_partition_build(const float *xyz, size_t n, int ranks, double til
     if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2])) continue;
     int r = mgs_partition_owner(p, q);
     p->count[r]++;
+    p->cost[r] += cost ? cost[i] : 1.0;
     /* the box of the owner's tiles, not just its points */
     for (int k = 0; k < 3; k++) {
       double t0 = floor((double)q[k] * inv) * tile;
@@ -188,4 +214,52 @@ void mgs_partition_order_by_chunks(const uint32_t *chunk_of, size_t n, uint32_t 
   for (size_t j = 0; j < n; j++) out[start[rank[chunk_of[perm[j]]]]++] = perm[j];
   memcpy(perm, out, n * sizeof *perm);
   free(start);
+}
+
+mgs_status mgs_partition_pixel_costs(const float *xyz, size_t n, const mgs_camera *cams, size_t n_cams, double *cost,
+                                     mgs_error *err) {
+  uint8_t *seen = malloc(n ? n : 1);
+  double *pix = calloc(n ? n : 1, sizeof *pix);
+  if (!seen || !pix) { free(seen); free(pix); return mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu points", n); }
+  double P = 0;
+  for (size_t v = 0; v < n_cams; v++) {
+    const mgs_camera *c = &cams[v];
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+      const double q[3] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+      double u, w, z;
+      seen[i] = (uint8_t)(isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2]) && mgs_camera_project(c, q, &u, &w, &z) &&
+                          u >= 0 && w >= 0 && u < c->width && w < c->height);
+      k += seen[i];
+    }
+    if (!k) continue;
+    /* the view's pixels shared among the points it sees */
+    double share = (double)c->width * (double)c->height / (double)k;
+    for (size_t i = 0; i < n; i++)
+      if (seen[i]) pix[i] += share;
+    P += (double)c->width * (double)c->height;
+  }
+  size_t nf = 0;
+  for (size_t i = 0; i < n; i++) nf += isfinite(xyz[3 * i]) && isfinite(xyz[3 * i + 1]) && isfinite(xyz[3 * i + 2]);
+  for (size_t i = 0; i < n; i++) cost[i] = (nf ? 1.0 / (double)nf : 0) + (P > 0 ? pix[i] / P : 0);
+  free(seen); free(pix);
+  return MGS_OK;
+}
+
+mgs_status mgs_partition_for_dataset(const mgs_dataset *ds, int ranks, int by_pixels, mgs_partition **out, mgs_error *err) {
+  *out = NULL;
+  if (!ds->init_points || !ds->init_points->n)
+    return mgs_error_set(err, MGS_ERR_ARG, "partition: the dataset has no initial points (points3d.ply / SfM points)");
+  const mgs_point_cloud *pc = ds->init_points;
+  if (!by_pixels || ranks == 1) return mgs_partition_build(pc->xyz, pc->n, ranks, 0, out, err);
+  size_t nv = ds->n_views[MGS_SPLIT_TRAIN];
+  double *cost = malloc(pc->n * sizeof *cost);
+  mgs_camera *cams = malloc((nv ? nv : 1) * sizeof *cams);
+  mgs_status st = MGS_OK;
+  if (!cost || !cams) st = mgs_error_set(err, MGS_ERR_NOMEM, "partition: out of memory for %zu points", pc->n);
+  for (size_t v = 0; v < nv && !st; v++) cams[v] = ds->views[MGS_SPLIT_TRAIN][v].cam;
+  if (!st) st = mgs_partition_pixel_costs(pc->xyz, pc->n, cams, nv, cost, err);
+  if (!st) st = mgs_partition_build_weighted(pc->xyz, cost, pc->n, ranks, 0, out, err);
+  free(cost); free(cams);
+  return st;
 }

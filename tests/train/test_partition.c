@@ -7,6 +7,7 @@
 #include <string.h>
 #include "mgs_test.h"
 #include "core/mgs_rng.h"
+#include "core/mgs_camera.h"
 #include "train/mgs_partition.h"
 
 /* slab 0: a flat city-like slab above z = 0; slab 1: a ground plane around z = 0 (the
@@ -89,6 +90,64 @@ static void test_partition_ground(void) { test_partition_slab(1); }
 
 /* Views ordered by chunks: a permutation, each chunk consecutive, chunks in the order of
  * their first appearance and views within a chunk in the input order. */
+/* Cost by pixels: views that all look at one corner of a ground slab make its points dear,
+   so the blocks balance cost (each about half of it), not points: the block over the seen
+   corner holds fewer of them. Unseen points cost 1/N; the points' costs sum to 1 and the
+   pixels' to 1. */
+static void test_pixel_costs(void) {
+  const size_t n = 20000;
+  float *xyz = malloc(n * 3 * sizeof(float));
+  double *cost = malloc(n * sizeof(double));
+  mgs_rng r;
+  mgs_rng_init(&r, 3, 2);
+  for (size_t i = 0; i < n; i++) {
+    xyz[3 * i] = (float)(8.0 * mgs_rng_uniform(&r) - 4.0);
+    xyz[3 * i + 1] = (float)(8.0 * mgs_rng_uniform(&r) - 4.0);
+    xyz[3 * i + 2] = (float)(0.1 * mgs_rng_uniform(&r) - 0.05);
+  }
+  mgs_camera cams[7];
+  for (int v = 0; v < 7; v++) {
+    mgs_camera_init_fovx(&cams[v], 64, 64, 1.0);
+    const double eye[3] = {-2.0 + 0.2 * v, -2.0, 2.0}, at[3] = {-2.0 + 0.2 * v, -2.0, 0.0}, up[3] = {0, 1, 0};
+    mgs_camera_look_at(&cams[v], eye, at, up);
+  }
+  mgs_error err;
+  CHECK_OK(mgs_partition_pixel_costs(xyz, n, cams, 7, cost, &err), &err);
+  double sum = 0, cheap = 0, dear = 0;
+  size_t n_right = 0;
+  for (size_t i = 0; i < n; i++) {
+    sum += cost[i];
+    if (xyz[3 * i] > 1 || xyz[3 * i + 1] > 1) { n_right++; cheap = fmax(cheap, cost[i]); } else dear = fmax(dear, cost[i]);
+  }
+  CHECK_MSG(fabs(sum - 2.0) < 1e-9, "costs sum to %.12f", sum);
+  CHECK_MSG(cheap == 1.0 / (double)n, "an unseen point costs %g", cheap);
+  CHECK(dear > 10.0 / (double)n);
+  mgs_partition *p = NULL, *q = NULL;
+  CHECK_OK(mgs_partition_build_weighted(xyz, cost, n, 2, 0, &p, &err), &err);
+  CHECK_OK(mgs_partition_build(xyz, n, 2, 0, &q, &err), &err);
+  if (p && q) {
+    fprintf(stderr, "  by count: %zu / %zu points; by cost: %zu / %zu points, cost %.3f / %.3f\n", q->count[0], q->count[1],
+            p->count[0], p->count[1], p->cost[0], p->cost[1]);
+    CHECK(p->count[0] + p->count[1] == n);
+    CHECK_MSG(fabs(p->cost[0] - 1.0) < 0.05 && fabs(p->cost[1] - 1.0) < 0.05, "cost %.3f / %.3f", p->cost[0], p->cost[1]);
+    size_t lo = p->count[0] < p->count[1] ? p->count[0] : p->count[1];
+    CHECK_MSG(lo < 0.4 * n, "the dear block still holds %zu of %zu points", lo, n);
+    CHECK(fabs((double)q->count[0] - (double)q->count[1]) < 0.1 * n);
+  }
+  mgs_partition_destroy(p); mgs_partition_destroy(q);
+  /* all costs zero: by count, as without costs; a negative cost is refused */
+  for (size_t i = 0; i < n; i++) cost[i] = 0;
+  p = NULL;
+  CHECK_OK(mgs_partition_build_weighted(xyz, cost, n, 2, 0, &p, &err), &err);
+  if (p) CHECK(fabs((double)p->count[0] - (double)p->count[1]) < 0.1 * n);
+  mgs_partition_destroy(p);
+  cost[5] = -1;
+  p = NULL;
+  CHECK(mgs_partition_build_weighted(xyz, cost, n, 2, 0, &p, &err) == MGS_ERR_ARG && p == NULL);
+  (void)n_right;
+  free(xyz); free(cost);
+}
+
 static void test_view_chunks(void) {
   const size_t n = 50;
   float c[150];
@@ -127,6 +186,7 @@ static void test_view_chunks(void) {
 int main(void) {
   RUN(test_partition);
   RUN(test_partition_ground);
+  RUN(test_pixel_costs);
   RUN(test_view_chunks);
   return mgs_test_finish();
 }

@@ -180,13 +180,18 @@ int mgs_bench_mpi(int argc, char **argv) {
   static const struct option opts[] = {{"ranks", required_argument, 0, 'k'}, {"iters", required_argument, 0, 'i'},
                                        {"res", required_argument, 0, 'r'},   {"mpirun", required_argument, 0, 'm'},
                                        {"output", required_argument, 0, 'o'}, {"no-weak", no_argument, 0, 'w'}, {"size", required_argument, 0, 's'}, {"exchange-every", required_argument, 0, 'e'},
-                                       {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
-  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2, every = 10;
+                                       {"split-by", required_argument, 0, 'p'}, {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
+  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2, every = 10, by_pixels = 1;
   const char *mpirun = "mpirun", *outdir = NULL;
   optind = 1;
   int c;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     switch (c) {
+      case 'p':
+        if (!strcmp(optarg, "pixels")) by_pixels = 1;
+        else if (!strcmp(optarg, "points")) by_pixels = 0;
+        else { fprintf(stderr, "morsegs bench mpi: --split-by must be pixels or points (got '%s')\n", optarg); return 2; }
+        break;
       case 'k': {
         nk = 0;
         char *s = optarg, *end;
@@ -207,7 +212,7 @@ int mgs_bench_mpi(int argc, char **argv) {
       case 'e': every = atoi(optarg); if (every < 1) { fprintf(stderr, "morsegs bench mpi: --exchange-every must be >= 1\n"); return 2; } break;
       case 's': size = atoi(optarg); if (size < 1 || size > 8) { fprintf(stderr, "morsegs bench mpi: --size must be 1..8\n"); return 2; } break;
       case 'h':
-        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--exchange-every E (10)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
+        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--exchange-every E (10)] [--split-by pixels|points (pixels)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
                "  K blocks on K ranks (independent; ghosts exchanged every E steps after densification, which\n"
                "  ends at N/2) against one process at K x N steps: seam / interior PSNR, bytes gathered and exchanged,\n"
                "  load imbalance; weak scaling city 1 on 1 rank vs city 2 on 4 ranks. Writes DIR/mpi.md, mpi.csv.\n");
@@ -244,10 +249,11 @@ int mgs_bench_mpi(int argc, char **argv) {
   size_t cl = 0;
   cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "ranks,model,steps_per_rank,psnr_seam,psnr_interior,seam_pixels,pixels,wall_s,bytes_gathered,bytes_exchanged_per_step,load_imbalance\n");
   ml += (size_t)snprintf(md + ml, sizeof md - ml,
-                         "# morsegs bench mpi\n\ncity %d (%d² views, %zu train / %zu test), %d iterations per rank, densification until half of them, one thread per rank, `%s`.\n\n"
+                         "# morsegs bench mpi\n\ncity %d (%d² views, %zu train / %zu test), %d iterations per rank, densification until half of them, one thread per rank, `%s`; blocks of equal %s.\n\n"
                          "| ranks | model | steps per rank | PSNR seam | PSNR interior | seam share of pixels | wall s | bytes gathered | bytes exchanged per step | load imbalance |\n"
                          "|---|---|---|---|---|---|---|---|---|---|\n",
-                         size, res, ds->n_views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TEST], iters, mpirun);
+                         size, res, ds->n_views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TEST], iters, mpirun,
+                         by_pixels ? "points + pixels that see them (--split-by pixels)" : "points (--split-by points)");
   int rc = 0;
   for (int q = 0; q < nk && !rc; q++) {
     int K = ks[q], half = iters / 2;
@@ -257,8 +263,8 @@ int mgs_bench_mpi(int argc, char **argv) {
     for (int x = 0; x < 2 && !rc; x++) {
       snprintf(rb[x], sizeof rb[x], "%s/np%d%s", base, K, x ? "_ghosts" : "");
       char extra[96];
-      if (x) snprintf(extra, sizeof extra, "--exchange-every %d", every);
-      else snprintf(extra, sizeof extra, "--independent");
+      if (x) snprintf(extra, sizeof extra, "--exchange-every %d --split-by %s", every, by_pixels ? "pixels" : "points");
+      else snprintf(extra, sizeof extra, "--independent --split-by %s", by_pixels ? "pixels" : "points");
       snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np %d '%s' train --mpi '%s' -o '%s' --iters %d --densify-until %d %s --seed 1 "
                "--quiet --force > '%s.log' 2>&1", mpirun, K, self, city, rb[x], iters, half, extra, rb[x]);
       double t0 = mgs_now();
@@ -273,7 +279,7 @@ int mgs_bench_mpi(int argc, char **argv) {
     if (run(cmd)) { fprintf(stderr, "morsegs bench mpi: the single-process run failed (see %s.log)\n", rs); rc = 1; break; }
     double wall_s = mgs_now() - t0;
     mgs_partition *part = NULL;
-    if (mgs_partition_for_dataset(ds, K, 1, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
+    if (mgs_partition_for_dataset(ds, K, by_pixels, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
     char pb[2][9000], ps[4600];
     for (int x = 0; x < 2; x++) snprintf(pb[x], sizeof pb[x], "%s/point_cloud/iteration_%d/point_cloud.ply", rb[x], iters);
     snprintf(ps, sizeof ps, "%s/point_cloud/iteration_%d/point_cloud.ply", rs, K * iters);
@@ -322,7 +328,8 @@ int mgs_bench_mpi(int argc, char **argv) {
              self, city1, r1, iters, iters / 2, r1);
     int ok = run(cmd) == 0;
     snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np 4 '%s' train --mpi '%s' -o '%s' --iters %d --densify-until %d --exchange-every %d "
-             "--seed 1 --quiet --force > '%s.log' 2>&1", mpirun, self, city2, r4, iters, iters / 2, every, r4);
+             "--split-by %s --seed 1 --quiet --force > '%s.log' 2>&1", mpirun, self, city2, r4, iters, iters / 2, every,
+             by_pixels ? "pixels" : "points", r4);
     ok = ok && run(cmd) == 0;
     cJSON *a = ok ? read_json(r1, "train_stats.json") : NULL, *b = ok ? read_json(r4, "mpi_stats.json") : NULL;
     double t1 = a ? jnum(a, "train_seconds") : NAN, t4 = b ? jnum(b, "train_seconds_max") : NAN;

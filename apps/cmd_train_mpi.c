@@ -10,10 +10,11 @@
  * rank whose block never comes is named and the run ended: --mpi-timeout). One process
  * (-np 1) runs the serial trainer unchanged: the same model as `morsegs train`.
  *
- * Not done: Gaussians are not migrated (at the hand-off the copies a rank trained of a
- * neighbour's region are dropped, the owner's kept; after it a Gaussian that drifts out of
- * its block stays with its owner), ghosts are averaged with nothing (owner-computes, no
- * ADMM consensus), costs are split by Gaussians only (not pixels).
+ * Every --migrate-every steps after the hand-off, Gaussians whose means have left their
+ * block move to the block that holds them with their Adam moments. Blocks are balanced by
+ * points plus the pixels that see them (--split-by). Not done: at the hand-off the copies a
+ * rank trained of a neighbour's region are dropped (the owner's kept), and ghosts are
+ * owner-computed (no averaging or ADMM consensus).
  * Each rank checkpoints its block (RUN/ranks/rank_K.mgsckpt); --resume continues every
  * rank. A failing rank ends the whole run (MPI_Abort) with its message; a rank that dies
  * is named by mpirun, which ends the others. */
@@ -51,7 +52,7 @@ typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
   int checkpoint_every, resume, force;
-  int densify_until, exchange_every, independent;
+  int densify_until, exchange_every, independent, migrate_every;
   int split_points; /* --split-by points: blocks balanced by points, not points + pixels */
   int vdb_resolution; /* > 0: the merged model's .vdb, built by blocks */
   double margin;  /* ghost margin in tiles */
@@ -63,7 +64,7 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
   memset(o, 0, sizeof *o);
   o->iters = 30000; o->sh_degree = 3; o->white = 1; o->sparse = -1; o->margin = 1.0; o->strategy_adc = 1; o->timeout = -1;
   o->checkpoint_every = 1000;
-  o->densify_until = -1; o->exchange_every = 100;
+  o->densify_until = -1; o->exchange_every = 100; o->migrate_every = 100;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     char *end = NULL;
@@ -87,11 +88,12 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--independent")) o->independent = 1;
     else if (!strcmp(a, "--split-by")) { if (!v) goto need; i++; if (!strcmp(v, "points")) o->split_points = 1; else if (!strcmp(v, "pixels")) o->split_points = 0; else goto bad; }
     else if (!strcmp(a, "--densify-until")) { if (!v) goto need; o->densify_until = (int)strtol(v, &end, 10); i++; if (*end || o->densify_until < 1) goto bad; }
+    else if (!strcmp(a, "--migrate-every")) { if (!v) goto need; o->migrate_every = (int)strtol(v, &end, 10); i++; if (*end || o->migrate_every < 0) goto bad; }
     else if (!strcmp(a, "--exchange-every")) { if (!v) goto need; o->exchange_every = (int)strtol(v, &end, 10); i++; if (*end || o->exchange_every < 0) goto bad; }
     else if (!strcmp(a, "--checkpoint-every")) { if (!v) goto need; o->checkpoint_every = (int)strtol(v, &end, 10); i++; if (*end || o->checkpoint_every < 0) goto bad; }
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --split-by, --densify-until, --exchange-every, --independent, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --split-by, --densify-until, --exchange-every, --migrate-every, --independent, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -263,7 +265,8 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     char gname[64];
     snprintf(gname, sizeof gname, "ranks/rank_%d.ghosts", rank);
     char *side = mgs_path_join(mo->run, gname);
-    gh = side ? mgs_mpi_ghosts_create(part, rank, size, handoff, mo->exchange_every, m, side, mo->timeout) : NULL;
+    gh = side ? mgs_mpi_ghosts_create(part, rank, size, handoff, mo->exchange_every, mo->migrate_every, mo->checkpoint_every, m,
+                                      side, mo->timeout) : NULL;
     free(side);
     if (!gh) mgs_mpi_die(rank, "out of memory");
     o.after_step = mgs_mpi_ghosts_after_step;
@@ -324,9 +327,12 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
      when its message does not come (a collective would only hang) */
   int cnt = (int)(n_keep * (size_t)dims);
   double loss = mgs_trainer_last_loss(t);
-  enum { NHEAD = 10, NROW = 6 };
+  enum { NHEAD = 12, NROW = 6 };
+  unsigned long long mig_out = 0, mig_in = 0;
+  mgs_mpi_ghosts_migrated(gh, &mig_out, &mig_in);
   double head[NHEAD] = {(double)cnt, loss, train_s, (double)n_owned, (double)(n_local - n_owned), (double)kept, (double)n_keep,
-                        handed ? (double)mgs_mpi_ghosts_count(gh) : 0.0, (double)mgs_mpi_ghosts_bytes(gh), lag};
+                        handed ? (double)mgs_mpi_ghosts_count(gh) : 0.0, (double)mgs_mpi_ghosts_bytes(gh), lag,
+                        (double)mig_out, (double)mig_in};
   int *counts = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL, *displs = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL;
   double *heads = rank == 0 ? calloc((size_t)size * NHEAD, sizeof(double)) : NULL;
   float *all = NULL;
@@ -376,6 +382,11 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!heads_lag) mgs_mpi_die(rank, "out of memory");
     for (int r = 0; r < size; r++) heads_lag[r] = heads[NHEAD * r + 9];
   }
+  double *heads_mig = rank == 0 ? calloc((size_t)size * 2, sizeof(double)) : NULL;
+  if (rank == 0) {
+    if (!heads_mig) mgs_mpi_die(rank, "out of memory");
+    for (int r = 0; r < size; r++) heads_mig[2 * r] = heads[NHEAD * r + 10], heads_mig[2 * r + 1] = heads[NHEAD * r + 11];
+  }
   free(heads);
   int rc = 0;
   mgs_gaussians *merged = NULL;
@@ -421,7 +432,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     if (!st) {
       /* per-rank figures */
       char *path = mgs_path_join(mo->run, "mpi_stats.json");
-      size_t cap = 768 + (size_t)size * 224, len = 0;
+      size_t cap = 1024 + (size_t)size * 300, len = 0;
       char *text = malloc(cap);
       if (!path || !text) mgs_mpi_die(rank, "out of memory");
       unsigned long long xbytes = 0;
@@ -431,14 +442,19 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       len += (size_t)snprintf(text + len, cap - len, "{\n  \"handoff\": %d,\n  \"exchange_every\": %d,\n  \"bytes_exchanged\": %llu,\n"
                               "  \"bytes_exchanged_per_step\": %.1f,\n  \"ghost_lag_max\": %.9g,\n", handed ? handoff : -1,
                               handed ? mo->exchange_every : 0, xbytes, steps_after > 0 ? (double)xbytes / steps_after : 0.0, lag_max);
+      double mo_sum = 0, mi_sum = 0;
+      for (int r = 0; r < size; r++) mo_sum += heads_mig[2 * r], mi_sum += heads_mig[2 * r + 1];
+      len += (size_t)snprintf(text + len, cap - len, "  \"migrate_every\": %d,\n  \"migrated_out\": %.0f,\n  \"migrated_in\": %.0f,\n",
+                              handed ? mo->migrate_every : 0, mo_sum, mi_sum);
       len += (size_t)snprintf(text + len, cap - len, "  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
                               "  \"train_seconds_max\": %.3f,\n  \"load_imbalance\": %.3f,\n  \"bytes_gathered\": %lld,\n"
                               "  \"seconds\": %.3f,\n  \"per_rank\": [\n", size, n_all, loss_sum / size, tmax,
                               tsum > 0 ? tmax / (tsum / size) : 1.0, total * (long long)sizeof(float), MPI_Wtime() - t_start);
       for (int r = 0; r < size; r++)
         len += (size_t)snprintf(text + len, cap - len, "    {\"owned_init\": %llu, \"ghosts_init\": %llu, \"views\": %llu, \"merged\": %llu, "
-                                "\"ghosts\": %llu, \"bytes_sent\": %llu}%s\n", rows[NROW * r], rows[NROW * r + 1], rows[NROW * r + 2],
-                                rows[NROW * r + 3], rows[NROW * r + 4], rows[NROW * r + 5], r + 1 < size ? "," : "");
+                                "\"ghosts\": %llu, \"bytes_sent\": %llu, \"migrated_out\": %.0f, \"migrated_in\": %.0f}%s\n",
+                                rows[NROW * r], rows[NROW * r + 1], rows[NROW * r + 2], rows[NROW * r + 3], rows[NROW * r + 4],
+                                rows[NROW * r + 5], heads_mig[2 * r], heads_mig[2 * r + 1], r + 1 < size ? "," : "");
       len += (size_t)snprintf(text + len, cap - len, "  ]\n}\n");
       st = mgs_write_file_atomic(path, text, len, &err);
       free(path); free(text);
@@ -463,7 +479,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     free(vdb);
   }
   mgs_gaussians_destroy(merged);
-  free(all); free(counts); free(displs); free(rows); free(heads_lag);
+  free(all); free(counts); free(displs); free(rows); free(heads_lag); free(heads_mig);
   mgs_trainer_destroy(t);
   mgs_mpi_ghosts_destroy(gh);
   free(ckpt);

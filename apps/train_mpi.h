@@ -25,12 +25,16 @@ void mgs_mpi_merged_vdb(const mgs_gaussians *merged, const mgs_partition *part, 
  * after_step hook (user = the handle): at iteration `handoff` each rank keeps the Gaussians
  * its block holds and receives read-only copies of the neighbours' Gaussians whose 3σ
  * support grown by `margin` (world units) reaches its tiles; every `every` iterations
- * (0: only at the hand-off) the owners send their current values. `sidecar`: where the
- * fixed layout is kept for --resume. An exchange that has not completed after `timeout`
+ * (0: only at the hand-off) the owners send their current values; every `migrate_every`
+ * iterations (0: never) Gaussians whose means left their owner's block move to the block
+ * that holds them, with their Adam moments, and the layout is made again. `sidecar`: where
+ * the layouts are kept for --resume (as far back as the last checkpoint, every
+ * `checkpoint_every` iterations, needs). An exchange that has not completed after `timeout`
  * seconds (<= 0: 600) ends the run, naming this rank's neighbours. */
 typedef struct mgs_mpi_ghosts mgs_mpi_ghosts;
 mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
-                                      double margin, const char *sidecar, double timeout);
+                                      int migrate_every, int checkpoint_every, double margin, const char *sidecar,
+                                      double timeout);
 void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh);
 struct mgs_trainer;
 mgs_status mgs_mpi_ghosts_after_step(void *user, struct mgs_trainer *t, mgs_error *err);
@@ -41,6 +45,8 @@ size_t mgs_mpi_ghosts_owned(const mgs_mpi_ghosts *gh); /* rows [0, owned) are th
 size_t mgs_mpi_ghosts_count(const mgs_mpi_ghosts *gh);
 unsigned long long mgs_mpi_ghosts_bytes(const mgs_mpi_ghosts *gh); /* sent by this rank so far */
 long mgs_mpi_ghosts_exchanges(const mgs_mpi_ghosts *gh);
+/* Gaussians this rank sent to and received from other blocks by migration so far. */
+void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in);
 /* Collective: the largest |ghost - its owner's current value| over this rank's ghosts. */
 mgs_status mgs_mpi_ghosts_lag(mgs_mpi_ghosts *gh, const struct mgs_trainer *t, double *lag, mgs_error *err);
 #endif

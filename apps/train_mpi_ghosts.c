@@ -6,15 +6,18 @@
  * margins are dropped (the owners' own Gaussians cover those regions; moving them over
  * would double the content there). Then each rank receives read-only ghost copies of the
  * neighbours' Gaussians whose 3σ support, grown by the margin, reaches one of its tiles.
- * Densification is over, so the rows stay fixed from here on: every K iterations each
- * owner sends the current parameters of the rows it exports through one
- * MPI_Neighbor_alltoallv on a distributed-graph communicator of the ranks that share
- * ghosts, and after every step the ghosts are put back to the values last received, so
- * only their owners' gradients move them.
+ * Densification is over, so no rows are born: every K iterations each owner sends the
+ * current parameters of the rows it exports through one MPI_Neighbor_alltoallv on a
+ * distributed-graph communicator of the ranks that share ghosts, and after every step the
+ * ghosts are put back to the values last received, so only their owners' gradients move
+ * them. Every M iterations (--migrate-every) the Gaussians whose means have left their
+ * owner's block move to the block that now holds them, with their Adam moments, and the
+ * ghost layout is made again.
  *
- * The rows and neighbours are fixed at the hand-off and written to RUN/ranks/rank_K.ghosts,
- * so a rank resumed from a later checkpoint (which holds the ghosts as last received, the
- * hook runs before the checkpoint) continues exactly. */
+ * Each layout (rows, neighbours) is written to RUN/ranks/rank_K.ghosts with the iteration
+ * it was made at, the older ones kept until a checkpoint has passed them, so a rank resumed
+ * from any checkpoint (which holds the ghosts as last received: the hook runs before the
+ * checkpoint) takes the layout in force there and continues exactly. */
 #ifdef MGS_HAVE_MPI
 #include <math.h>
 #include <stdio.h>
@@ -44,12 +47,19 @@ struct mgs_mpi_ghosts {
   double limit;           /* seconds an exchange may take before the run is ended */
   int explicit_limit;     /* limit came from --mpi-timeout */
   int iteration;          /* of the exchange under way (for messages) */
+  int migrate_every, ckpt_every;
+  unsigned long long migrated_out, migrated_in;
+  char *hist;             /* the layout records the sidecar holds (oldest first) */
+  size_t hist_len;
 };
 
 mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int size, int handoff, int every,
-                                      double margin, const char *sidecar, double timeout) {
+                                      int migrate_every, int checkpoint_every, double margin, const char *sidecar,
+                                      double timeout) {
   mgs_mpi_ghosts *gh = calloc(1, sizeof *gh);
   if (!gh) return NULL;
+  gh->migrate_every = migrate_every > 0 ? migrate_every : 0;
+  gh->ckpt_every = checkpoint_every > 0 ? checkpoint_every : 0;
   gh->limit = timeout > 0 ? timeout : 600.0;
   gh->explicit_limit = timeout > 0;
   gh->rank = rank; gh->size = size; gh->handoff = handoff; gh->every = every;
@@ -60,13 +70,28 @@ mgs_mpi_ghosts *mgs_mpi_ghosts_create(const mgs_partition *part, int rank, int s
   return gh;
 }
 
-void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh) {
-  if (!gh) return;
+/* forgets the ghost layout (collective: the graph communicator is freed) */
+static void free_layout(mgs_mpi_ghosts *gh) {
   if (gh->graph != MPI_COMM_NULL) MPI_Comm_free(&gh->graph);
-  free(gh->sidecar); free(gh->nb); free(gh->srows); free(gh->rrows);
+  gh->graph = MPI_COMM_NULL;
+  free(gh->nb); free(gh->srows); free(gh->rrows);
   free(gh->scount); free(gh->sdispl); free(gh->rcount); free(gh->rdispl);
   free(gh->exp); free(gh->vals); free(gh->sbuf);
+  gh->nb = gh->srows = gh->rrows = gh->scount = gh->sdispl = gh->rcount = gh->rdispl = NULL;
+  gh->exp = NULL; gh->vals = gh->sbuf = NULL;
+  gh->n_nb = 0; gh->n_exp = gh->n_ghost = 0;
+}
+
+void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh) {
+  if (!gh) return;
+  free_layout(gh);
+  free(gh->sidecar); free(gh->hist);
   free(gh);
+}
+
+void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in) {
+  *out = gh ? gh->migrated_out : 0;
+  *in = gh ? gh->migrated_in : 0;
 }
 
 int mgs_mpi_ghosts_active(const mgs_mpi_ghosts *gh) { return gh && gh->active; }
@@ -189,31 +214,56 @@ static void touched_ranks(const mgs_partition *p, const double lo[3], const doub
       }
 }
 
-static mgs_status write_sidecar(const mgs_mpi_ghosts *gh, mgs_error *err) {
-  size_t cap = 64 + (size_t)gh->n_nb * 3 * sizeof(int) + gh->n_exp * sizeof(uint32_t), len = 0;
-  char *buf = malloc(cap);
+#define GHOST_MAGIC 0x3254534f4847ull /* "GHOST2": a record of the layout history */
+enum { REC_HEAD = 6 };                  /* magic, iteration, hand-off, owned rows, neighbours, exported rows */
+
+/* The record at buf[off...] (len bytes in all): its iteration and size; 0 if damaged. */
+static size_t record_at(const char *buf, size_t len, size_t off, int size, uint64_t head[REC_HEAD]) {
+  if (len - off < REC_HEAD * sizeof(uint64_t)) return 0;
+  memcpy(head, buf + off, REC_HEAD * sizeof(uint64_t));
+  if (head[0] != GHOST_MAGIC || head[4] > (uint64_t)size || head[5] > (uint64_t)UINT32_MAX) return 0;
+  size_t n = REC_HEAD * sizeof(uint64_t) + 3 * (size_t)head[4] * sizeof(int) + (size_t)head[5] * sizeof(uint32_t);
+  return n <= len - off ? n : 0;
+}
+
+/* Appends this layout to the history and writes the sidecar, dropping the records no
+   checkpoint can need any more: the checkpoints run after this hook, so the last one surely
+   on disk is the last multiple of the checkpoint interval before this iteration, and the
+   record in force there (the newest not after it) is the oldest kept. */
+static mgs_status write_sidecar(mgs_mpi_ghosts *gh, int iteration, mgs_error *err) {
+  size_t rec = REC_HEAD * sizeof(uint64_t) + 3 * (size_t)gh->n_nb * sizeof(int) + gh->n_exp * sizeof(uint32_t);
+  long safe = gh->ckpt_every > 0 ? (long)((iteration - 1) / gh->ckpt_every) * gh->ckpt_every : -1;
+  size_t keep_from = gh->hist_len, off = 0;
+  uint64_t head[REC_HEAD];
+  for (size_t n; off < gh->hist_len && (n = record_at(gh->hist, gh->hist_len, off, gh->size, head)); off += n)
+    if ((long)head[1] <= safe) keep_from = off;
+  if (keep_from == gh->hist_len) keep_from = safe >= 0 ? 0 : gh->hist_len; /* none before it: keep all */
+  size_t kept = gh->hist_len - keep_from;
+  char *buf = malloc(kept + rec);
   if (!buf) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
-  uint64_t head[4] = {0x3154534f4847ull /* "GHOST1" */, (uint64_t)gh->handoff, (uint64_t)gh->n_own, (uint64_t)gh->n_nb};
-  memcpy(buf, head, sizeof head); len = sizeof head;
+  memcpy(buf, gh->hist + keep_from, kept);
+  size_t len = kept;
+  uint64_t h[REC_HEAD] = {GHOST_MAGIC, (uint64_t)iteration, (uint64_t)gh->handoff, (uint64_t)gh->n_own, (uint64_t)gh->n_nb,
+                          (uint64_t)gh->n_exp};
+  memcpy(buf + len, h, sizeof h); len += sizeof h;
   memcpy(buf + len, gh->nb, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
   memcpy(buf + len, gh->srows, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
   memcpy(buf + len, gh->rrows, (size_t)gh->n_nb * sizeof(int)); len += (size_t)gh->n_nb * sizeof(int);
   memcpy(buf + len, gh->exp, gh->n_exp * sizeof(uint32_t)); len += gh->n_exp * sizeof(uint32_t);
   mgs_status st = mgs_write_file_atomic(gh->sidecar, buf, len, err);
-  free(buf);
-  return st;
+  if (st) { free(buf); return st; }
+  free(gh->hist);
+  gh->hist = buf;
+  gh->hist_len = len;
+  return MGS_OK;
 }
 
-static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
+/* The ghost layout of a model that holds only this rank's own rows: which of them each
+   neighbour needs, the graph communicator, a first exchange, the ghosts appended. */
+static mgs_status layout(mgs_mpi_ghosts *gh, mgs_trainer *t, int iteration, mgs_error *err) {
   const mgs_partition *p = gh->part;
   mgs_gaussians *g = mgs_trainer_model_mut(t);
-  uint8_t *keep = malloc(g->n ? g->n : 1);
-  if (!keep) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
-  for (size_t i = 0; i < g->n; i++) keep[i] = (uint8_t)(mgs_partition_owner(p, g->mean + 3 * i) == gh->rank);
-  mgs_status st = mgs_trainer_edit_model(t, keep, 0, NULL, err);
-  free(keep);
-  if (st) return st;
-  g = mgs_trainer_model_mut(t);
+  mgs_status st = MGS_OK;
   gh->n_own = g->n;
   /* which owned rows each other rank needs */
   int size = gh->size;
@@ -267,11 +317,95 @@ static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
   if ((st = mgs_trainer_edit_model(t, NULL, gh->n_ghost, &first, err))) goto done;
   gh->active = 1;
   restore(gh, mgs_trainer_model_mut(t));
-  st = write_sidecar(gh, err);
+  st = write_sidecar(gh, iteration, err);
 done:
   if (lists) for (int q = 0; q < size; q++) free(lists[q]);
   free(lists); free(cap); free(hit); free(sendn); free(recvn);
   return st;
+}
+
+static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
+  mgs_gaussians *g = mgs_trainer_model_mut(t);
+  uint8_t *keep = malloc(g->n ? g->n : 1);
+  if (!keep) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (size_t i = 0; i < g->n; i++) keep[i] = (uint8_t)(mgs_partition_owner(gh->part, g->mean + 3 * i) == gh->rank);
+  mgs_status st = mgs_trainer_edit_model(t, keep, 0, NULL, err);
+  free(keep);
+  return st ? st : layout(gh, t, gh->handoff, err);
+}
+
+/* Owned Gaussians whose means now lie in another block go there, parameters and Adam
+   moments together (one MPI_Alltoallv); the ghosts are dropped and the layout is made
+   again. Every rank takes part (collectives over all ranks, bounded in time). */
+static mgs_status migrate(mgs_mpi_ghosts *gh, mgs_trainer *t, int iteration, mgs_error *err) {
+  mgs_gaussians *g = mgs_trainer_model_mut(t);
+  mgs_adam *ad = mgs_trainer_adam_mut(t);
+  const int size = gh->size, row = 3 * gh->dims;
+  const size_t n_own = gh->n_own;
+  int *dest = malloc((n_own ? n_own : 1) * sizeof(int));
+  int *sendn = calloc((size_t)size, sizeof(int)), *recvn = calloc((size_t)size, sizeof(int));
+  int *sd = calloc((size_t)size, sizeof(int)), *rd = calloc((size_t)size, sizeof(int));
+  uint8_t *keep = malloc(g->n ? g->n : 1);
+  if (!dest || !sendn || !recvn || !sd || !rd || !keep) mgs_mpi_die(gh->rank, "out of memory for the migration");
+  size_t out = 0;
+  for (size_t i = 0; i < n_own; i++) {
+    dest[i] = mgs_partition_owner(gh->part, g->mean + 3 * i);
+    if (dest[i] != gh->rank) sendn[dest[i]]++, out++;
+  }
+  MPI_Request rq;
+  MPI_Ialltoall(sendn, 1, MPI_INT, recvn, 1, MPI_INT, MPI_COMM_WORLD, &rq);
+  wait_bounded(gh, &rq, "migration", 1);
+  size_t in = 0;
+  for (int q = 0; q < size; q++) in += (size_t)recvn[q];
+  if ((out + in) * (size_t)row > (size_t)INT32_MAX) mgs_mpi_die(gh->rank, "too many Gaussians to migrate in one MPI message");
+  float *sb = malloc((out ? out : 1) * (size_t)row * sizeof(float)), *rb = malloc((in ? in : 1) * (size_t)row * sizeof(float));
+  if (!sb || !rb) mgs_mpi_die(gh->rank, "out of memory for the migration");
+  /* rows grouped by destination: parameters, then first and second moments, group by group */
+  size_t at = 0;
+  for (int q = 0, s = 0, r = 0; q < size; q++) {
+    sd[q] = s; rd[q] = r;
+    s += sendn[q] * row; r += recvn[q] * row;
+    if (!sendn[q]) continue;
+    for (size_t i = 0; i < n_own; i++) {
+      if (dest[i] != q) continue;
+      float *o = sb + at * (size_t)row;
+      for (int pass = 0; pass < 3; pass++)
+        for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+          size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+          const float *src = pass == 0 ? mgs_gaussians_group(g, (mgs_param_group)k) : pass == 1 ? ad->m[k] : ad->v[k];
+          memcpy(o, src + i * d, d * sizeof(float));
+          o += d;
+        }
+      at++;
+    }
+  }
+  for (int q = 0; q < size; q++) { sendn[q] *= row; recvn[q] *= row; }
+  MPI_Ialltoallv(sb, sendn, sd, MPI_FLOAT, rb, recvn, rd, MPI_FLOAT, MPI_COMM_WORLD, &rq);
+  wait_bounded(gh, &rq, "migration", 1);
+  for (size_t i = 0; i < g->n; i++) keep[i] = (uint8_t)(i < n_own && dest[i] == gh->rank);
+  size_t first = 0;
+  mgs_status st = mgs_trainer_edit_model(t, keep, in, &first, err);
+  if (!st) {
+    g = mgs_trainer_model_mut(t);
+    ad = mgs_trainer_adam_mut(t);
+    for (size_t j = 0; j < in; j++) {
+      const float *o = rb + j * (size_t)row;
+      for (int pass = 0; pass < 3; pass++)
+        for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+          size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+          float *dst = pass == 0 ? mgs_gaussians_group(g, (mgs_param_group)k) : pass == 1 ? ad->m[k] : ad->v[k];
+          memcpy(dst + (first + j) * d, o, d * sizeof(float));
+          o += d;
+        }
+    }
+    gh->migrated_out += out;
+    gh->migrated_in += in;
+  }
+  free(dest); free(sendn); free(recvn); free(sd); free(rd); free(keep); free(sb); free(rb);
+  /* every rank must reach the layout's collectives, also one whose edit failed */
+  free_layout(gh);
+  mgs_status st2 = layout(gh, t, iteration, err);
+  return st ? st : st2;
 }
 
 /* Test hook (as cmd_train_mpi.c's): MGS_MPI_FAULT=hang-at:K:N makes rank K stop answering
@@ -289,6 +423,7 @@ mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err)
   gh->iteration = it;
   fault_hang(gh->rank, it);
   if (!gh->active) return it == gh->handoff ? handoff(gh, t, err) : MGS_OK;
+  if (gh->migrate_every > 0 && (it - gh->handoff) % gh->migrate_every == 0) return migrate(gh, t, it, err);
   if (gh->every > 0 && (it - gh->handoff) % gh->every == 0) {
     mgs_status st = exchange(gh, mgs_trainer_model(t), err);
     if (st) return st;
@@ -298,21 +433,27 @@ mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err)
 }
 
 mgs_status mgs_mpi_ghosts_resume(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
-  if (mgs_trainer_iteration(t) < gh->handoff) return MGS_OK; /* the hand-off is still to come */
+  int it = mgs_trainer_iteration(t);
+  if (it < gh->handoff) return MGS_OK; /* the hand-off is still to come */
   char *buf = NULL;
   size_t len = 0;
   mgs_status st = mgs_read_file(gh->sidecar, &buf, &len, err);
   if (st) return st;
-  uint64_t head[4];
   const mgs_gaussians *g = mgs_trainer_model(t);
-  if (len < sizeof head) goto bad;
-  memcpy(head, buf, sizeof head);
-  if (head[0] != 0x3154534f4847ull || head[1] != (uint64_t)gh->handoff || head[2] > g->n || head[3] > (uint64_t)gh->size)
-    goto bad;
-  gh->n_own = (size_t)head[2];
-  gh->n_nb = (int)head[3];
-  size_t off = sizeof head, nbytes = (size_t)gh->n_nb * sizeof(int);
-  if (len < off + 3 * nbytes) goto bad;
+  /* every record must be whole; the one in force at the checkpoint is the newest not after it */
+  uint64_t head[REC_HEAD], use[REC_HEAD] = {0};
+  size_t off = 0, at = SIZE_MAX;
+  while (off < len) {
+    size_t n = record_at(buf, len, off, gh->size, head);
+    if (!n || head[2] != (uint64_t)gh->handoff) goto bad;
+    if ((long)head[1] <= it) at = off, memcpy(use, head, sizeof use);
+    off += n;
+  }
+  if (at == SIZE_MAX || use[3] > g->n) goto bad;
+  gh->n_own = (size_t)use[3];
+  gh->n_nb = (int)use[4];
+  off = at + REC_HEAD * sizeof(uint64_t);
+  size_t nbytes = (size_t)gh->n_nb * sizeof(int);
   gh->nb = malloc(nbytes + 1); gh->srows = malloc(nbytes + 1); gh->rrows = malloc(nbytes + 1);
   if (!gh->nb || !gh->srows || !gh->rrows) { free(buf); return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); }
   memcpy(gh->nb, buf + off, nbytes); off += nbytes;
@@ -323,12 +464,15 @@ mgs_status mgs_mpi_ghosts_resume(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *
     if (gh->nb[i] < 0 || gh->nb[i] >= gh->size || gh->nb[i] == gh->rank || gh->srows[i] < 0 || gh->rrows[i] < 0) goto bad;
     s += (size_t)gh->srows[i]; r += (size_t)gh->rrows[i];
   }
-  if (len != off + s * sizeof(uint32_t) || gh->n_own + r != g->n) goto bad;
+  if (s != use[5] || gh->n_own + r != g->n) goto bad;
   gh->exp = malloc((s ? s : 1) * sizeof(uint32_t));
   if (!gh->exp) { free(buf); return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory"); }
   memcpy(gh->exp, buf + off, s * sizeof(uint32_t));
   for (size_t j = 0; j < s; j++) if (gh->exp[j] >= gh->n_own) goto bad;
-  free(buf);
+  /* the history as far as this checkpoint: later records belong to a future that is redone */
+  free(gh->hist);
+  gh->hist = buf;
+  gh->hist_len = at + record_at(buf, len, at, gh->size, head);
   if ((st = set_counts(gh, err))) return st;
   /* the checkpoint holds the ghosts as last received */
   uint32_t *rows = malloc((gh->n_ghost ? gh->n_ghost : 1) * sizeof(uint32_t));
@@ -341,7 +485,7 @@ mgs_status mgs_mpi_ghosts_resume(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *
 bad:
   free(buf);
   return mgs_error_set(err, MGS_ERR_FORMAT, "%s: not the ghost layout of this rank's checkpoint (written at the hand-off, "
-                       "iteration %d); resume is not possible without it", gh->sidecar, gh->handoff);
+                       "iteration %d, and at each migration); resume is not possible without it", gh->sidecar, gh->handoff);
 }
 /* One more exchange into a scratch buffer: the largest difference between a ghost as
    this rank holds it and its owner's current value (0 right after an exchange). */

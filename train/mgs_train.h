@@ -213,6 +213,9 @@ mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
  * are appended at *first with zero Adam moments, for the caller to fill through
  * mgs_trainer_model_mut. Tiles and strategy state follow the new count. */
 mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t add, size_t *first, mgs_error *err);
+/* The Adam moments row for row with the model (a Gaussian that moves between distributed
+ * blocks takes its moments along). */
+mgs_adam *mgs_trainer_adam_mut(mgs_trainer *t);
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
 /* The learning rate the last iteration used for a parameter group. */

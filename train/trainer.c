@@ -141,6 +141,7 @@ int mgs_trainer_model_iteration(const mgs_trainer *t) {
 int mgs_trainer_active_sh(const mgs_trainer *t) { return t->active_sh; }
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
+mgs_adam *mgs_trainer_adam_mut(mgs_trainer *t) { return t->adam; }
 double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
 double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
 double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group) { return t->adam->lr[group]; }

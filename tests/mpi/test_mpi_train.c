@@ -264,9 +264,12 @@ static double jget(cJSON *j, const char *k) {
    step, every ghost equals its owner's value at the end (lag 0: the last iteration steps
    nothing); every 7 steps, the owners have moved since the last exchange (lag > 0) while
    the ghosts stayed put — they are read-only between exchanges. Every rank holds ghosts,
-   bytes are counted, the merged model is the owned rows only. --independent keeps the old
-   behaviour (no hand-off). A run cut after the hand-off resumes byte-identical; a damaged
-   ghost layout is refused by name. */
+   bytes are counted, the merged model is the owned rows only. Migration every 5 steps moves
+   Gaussians between blocks and keeps the ghosts exact. --independent keeps the old
+   behaviour (no hand-off). A run cut after the hand-off and after migrations (every 4 steps:
+   killed at 45, layouts made at 30, 34, 38, 42, checkpoint at 40) resumes byte-identical
+   from the layout in force at its checkpoint (38, not the newest); a damaged ghost layout is
+   refused by name. */
 static void test_ghosts(void) {
   char run[700], p[800];
   for (int np = 2; np <= 4; np += 2) {
@@ -290,8 +293,29 @@ static void test_ghosts(void) {
     CHECK(merged == jget(j, "gaussians"));
     cJSON_Delete(j);
   }
+  /* migration every 5 steps: Gaussians that left their block reach the block that holds
+     them (as many arrive as leave), the ghosts still equal their owners afterwards */
+  double moved = 0;
+  for (int np = 2; np <= 4; np += 2) {
+    snprintf(run, sizeof run, "%s/migrate%d", root, np);
+    CHECK_MSG(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 1 --migrate-every 5 --seed 1 --quiet",
+                 data, run, np) == 0, "-np %d", np);
+    cJSON *j = stats_of(run);
+    CHECK_MSG(j != NULL, "no stats in %s", run);
+    if (!j) continue;
+    fprintf(stderr, "  -np %d, migration every 5 steps: %.0f Gaussians moved\n", np, jget(j, "migrated_out"));
+    CHECK(jget(j, "migrated_out") == jget(j, "migrated_in") && jget(j, "migrate_every") == 5);
+    CHECK_MSG(jget(j, "ghost_lag_max") == 0, "-np %d: after migrations ghosts differ from their owners by %g", np, jget(j, "ghost_lag_max"));
+    cJSON *pr = cJSON_GetObjectItem(j, "per_rank");
+    double merged = 0;
+    for (int r = 0; r < cJSON_GetArraySize(pr); r++) merged += cJSON_GetObjectItem(cJSON_GetArrayItem(pr, r), "merged")->valuedouble;
+    CHECK(merged == jget(j, "gaussians"));
+    moved += jget(j, "migrated_out");
+    cJSON_Delete(j);
+  }
+  CHECK_MSG(moved > 0, "no Gaussian migrated in 30 steps after the hand-off (2 and 4 ranks)");
   snprintf(run, sizeof run, "%s/ghosts_lag", root);
-  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --seed 1 --quiet", data, run, 2) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --migrate-every 4 --seed 1 --quiet", data, run, 2) == 0);
   cJSON *j = stats_of(run);
   CHECK_MSG(jget(j, "ghost_lag_max") > 1e-6, "exchanges every 7 steps: lag %g (ghosts not read-only, or owners not trained?)",
             jget(j, "ghost_lag_max"));
@@ -306,7 +330,7 @@ static void test_ghosts(void) {
   snprintf(ref, sizeof ref, "%s/ghosts_lag", root);
   snprintf(cut, sizeof cut, "%s/ghosts_cut", root);
   setenv("MGS_MPI_FAULT", "exit-at:1:45", 1);
-  int rc = sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet", data, cut, -2);
+  int rc = sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --migrate-every 4 --checkpoint-every 20 --seed 1 --quiet", data, cut, -2);
   unsetenv("MGS_MPI_FAULT");
   CHECK(rc != 0 && rc != 124);
   snprintf(p, sizeof p, "%s/ranks/rank_1.ghosts", cut);
@@ -315,13 +339,13 @@ static void test_ghosts(void) {
   snprintf(save, sizeof save, "%s.bak", p);
   snprintf(cmd, sizeof cmd, "cp '%s' '%s' && truncate -s 20 '%s'", p, save, p);
   CHECK(system(cmd) == 0);
-  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, -2) != 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --migrate-every 4 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, -2) != 0);
   char *log = slurp(logp);
   CHECK_MSG(log && strstr(log, "rank_1.ghosts: not the ghost layout"), "log: %s", log ? log : "");
   free(log);
   snprintf(cmd, sizeof cmd, "mv '%s' '%s'", save, p);
   CHECK(system(cmd) == 0);
-  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, 2) == 0);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 7 --migrate-every 4 --checkpoint-every 20 --seed 1 --quiet --resume", data, cut, 2) == 0);
   log = slurp(logp);
   CHECK_MSG(log && strstr(log, "rank_1.mgsckpt at iteration 40"), "log: %s", log ? log : "");
   free(log);

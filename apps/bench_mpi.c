@@ -181,7 +181,7 @@ int mgs_bench_mpi(int argc, char **argv) {
                                        {"res", required_argument, 0, 'r'},   {"mpirun", required_argument, 0, 'm'},
                                        {"output", required_argument, 0, 'o'}, {"no-weak", no_argument, 0, 'w'}, {"size", required_argument, 0, 's'}, {"exchange-every", required_argument, 0, 'e'},
                                        {"split-by", required_argument, 0, 'p'}, {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
-  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2, every = 10, by_pixels = 1;
+  int ks[MAX_K] = {2, 4}, nk = 2, iters = 300, res = 64, weak = 1, size = 2, every = 10, by_pixels = 0;
   const char *mpirun = "mpirun", *outdir = NULL;
   optind = 1;
   int c;
@@ -212,7 +212,7 @@ int mgs_bench_mpi(int argc, char **argv) {
       case 'e': every = atoi(optarg); if (every < 1) { fprintf(stderr, "morsegs bench mpi: --exchange-every must be >= 1\n"); return 2; } break;
       case 's': size = atoi(optarg); if (size < 1 || size > 8) { fprintf(stderr, "morsegs bench mpi: --size must be 1..8\n"); return 2; } break;
       case 'h':
-        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--exchange-every E (10)] [--split-by pixels|points (pixels)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
+        printf("usage: morsegs bench mpi [--ranks 2,4] [--iters N (300)] [--res R (64)] [--size S (2)] [--exchange-every E (10)] [--split-by points|pixels (points)] [--mpirun PATH] [--no-weak] [-o DIR]\n"
                "  K blocks on K ranks (independent; ghosts exchanged every E steps after densification, which\n"
                "  ends at N/2) against one process at K x N steps: seam / interior PSNR, bytes gathered and exchanged,\n"
                "  load imbalance; weak scaling city 1 on 1 rank vs city 2 on 4 ranks. Writes DIR/mpi.md, mpi.csv.\n");
@@ -257,13 +257,17 @@ int mgs_bench_mpi(int argc, char **argv) {
   int rc = 0;
   for (int q = 0; q < nk && !rc; q++) {
     int K = ks[q], half = iters / 2;
-    char rb[2][4400], rs[4400];
-    double wall_b[2];
-    /* [0] independent blocks, [1] ghosts exchanged after the hand-off at `half` */
-    for (int x = 0; x < 2 && !rc; x++) {
-      snprintf(rb[x], sizeof rb[x], "%s/np%d%s", base, K, x ? "_ghosts" : "");
-      char extra[96];
-      if (x) snprintf(extra, sizeof extra, "--exchange-every %d --split-by %s", every, by_pixels ? "pixels" : "points");
+    char rbuf[3][4400], rs[4400];
+    const char *rb[3] = {rbuf[0], rbuf[1], rbuf[2]}; /* (pointers: gcc sizes a row of a 2-D array as the whole) */
+    double wall_b[3];
+    /* [0] independent blocks, [1] read-only ghosts exchanged after the hand-off at `half`,
+       [2] ghosts averaged with their owners at each exchange */
+    static const char *suffix[3] = {"", "_ghosts", "_average"};
+    for (int x = 0; x < 3 && !rc; x++) {
+      snprintf(rbuf[x], sizeof rbuf[x], "%s/np%d%s", base, K, suffix[x]);
+      char extra[128];
+      if (x) snprintf(extra, sizeof extra, "--exchange-every %d --ghosts %s --split-by %s", every, x == 2 ? "average" : "owner",
+                      by_pixels ? "pixels" : "points");
       else snprintf(extra, sizeof extra, "--independent --split-by %s", by_pixels ? "pixels" : "points");
       snprintf(cmd, sizeof cmd, "'%s' --oversubscribe -np %d '%s' train --mpi '%s' -o '%s' --iters %d --densify-until %d %s --seed 1 "
                "--quiet --force > '%s.log' 2>&1", mpirun, K, self, city, rb[x], iters, half, extra, rb[x]);
@@ -280,33 +284,35 @@ int mgs_bench_mpi(int argc, char **argv) {
     double wall_s = mgs_now() - t0;
     mgs_partition *part = NULL;
     if (mgs_partition_for_dataset(ds, K, by_pixels, &part, &err)) { rc = mgs_cli_fail("bench mpi", &err); break; }
-    char pb[2][9000], ps[4600];
-    for (int x = 0; x < 2; x++) snprintf(pb[x], sizeof pb[x], "%s/point_cloud/iteration_%d/point_cloud.ply", rb[x], iters);
+    char pb[3][9000], ps[4600];
+    for (int x = 0; x < 3; x++) snprintf(pb[x], sizeof pb[x], "%s/point_cloud/iteration_%d/point_cloud.ply", rb[x], iters);
     snprintf(ps, sizeof ps, "%s/point_cloud/iteration_%d/point_cloud.ply", rs, K * iters);
-    psnr_acc ab[2], as;
+    psnr_acc ab[3], as;
     size_t sn = 0, sd = 0;
     tile_map tm = {0};
     if (!tile_map_build(part, ds->init_points, &tm)) { free(tm.key); free(tm.owner); mgs_partition_destroy(part); fprintf(stderr, "morsegs bench mpi: out of memory\n"); rc = 1; break; }
     mgs_status es = eval_model(ds, pb[0], part, &tm, &ab[0], &sn, &sd, &err);
     if (!es) es = eval_model(ds, pb[1], part, &tm, &ab[1], NULL, NULL, &err);
+    if (!es) es = eval_model(ds, pb[2], part, &tm, &ab[2], NULL, NULL, &err);
     if (!es) es = eval_model(ds, ps, part, &tm, &as, NULL, NULL, &err);
     free(tm.key); free(tm.owner);
     mgs_partition_destroy(part);
     if (es) { rc = mgs_cli_fail("bench mpi", &err); break; }
-    for (int x = 0; x < 2; x++) {
+    for (int x = 0; x < 3; x++) {
       cJSON *st = read_json(rb[x], "mpi_stats.json");
       double bytes = st ? jnum(st, "bytes_gathered") : NAN, imb = st ? jnum(st, "load_imbalance") : NAN;
       double xps = st && x ? jnum(st, "bytes_exchanged_per_step") : 0;
       cJSON_Delete(st);
       char model[96];
-      if (x) snprintf(model, sizeof model, "%d blocks, ghosts every %d steps", K, every);
+      if (x == 1) snprintf(model, sizeof model, "%d blocks, ghosts every %d steps", K, every);
+      else if (x == 2) snprintf(model, sizeof model, "%d blocks, averaged ghosts every %d steps", K, every);
       else snprintf(model, sizeof model, "%d blocks, independent", K);
       ml += (size_t)snprintf(md + ml, sizeof md - ml, "| %d | %s | %d | %.2f | %.2f | %.1f %% | %.1f | %.0f | %.0f | %.2f |\n", K, model,
                              iters, psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sd ? 100.0 * sn / sd : 0.0, wall_b[x], bytes, xps, imb);
-      cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,%s,%d,%.4f,%.4f,%zu,%zu,%.2f,%.0f,%.0f,%.3f\n", K, x ? "blocks_ghosts" : "blocks", iters,
+      cl += (size_t)snprintf(csv + cl, sizeof csv - cl, "%d,%s,%d,%.4f,%.4f,%zu,%zu,%.2f,%.0f,%.0f,%.3f\n", K, x == 2 ? "blocks_average" : x ? "blocks_ghosts" : "blocks", iters,
                              psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sn, sd, wall_b[x], bytes, xps, imb);
       printf("-np %d %s: seam %.2f / interior %.2f dB, seam pixels %.1f %%, %.0f bytes gathered, %.0f bytes exchanged per step, imbalance %.2f\n",
-             K, x ? "ghosts" : "independent", psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sd ? 100.0 * sn / sd : 0.0, bytes, xps, imb);
+             K, x == 2 ? "averaged ghosts" : x ? "ghosts" : "independent", psnr_of(&ab[x], 0), psnr_of(&ab[x], 1), sd ? 100.0 * sn / sd : 0.0, bytes, xps, imb);
     }
     ml += (size_t)snprintf(md + ml, sizeof md - ml, "| 1 | one process, same total steps | %d | %.2f | %.2f | (same pixel split) | %.1f | – | – | – |\n",
                            K * iters, psnr_of(&as, 0), psnr_of(&as, 1), wall_s);

@@ -99,9 +99,11 @@ static void usage(FILE *f) {
     "                          --vdb-resolution R: the merged point_cloud.vdb, built by blocks;\n"
     "                          --densify-until N: hand-off there, then read-only ghosts refreshed every\n"
     "                          --exchange-every K steps (100); --migrate-every M (100): Gaussians that left\n"
-    "                          their block move to its owner with their Adam state; --independent: no hand-off;\n"
-    "                          --split-by pixels|points: blocks of equal points + pixels that see them\n"
-    "                          (default) or of equal points)\n"
+    "                          their block move to its owner with their Adam state; --ghosts owner|average:\n"
+    "                          read-only copies (default), or copies that train and are averaged with their\n"
+    "                          owner at each exchange; --independent: no hand-off;\n"
+    "                          --split-by points|pixels: blocks of equal points (default) or of equal\n"
+    "                          points + pixels that see them)\n"
     "      --quiet             no progress bar\n"
     "%s",
     train_morse_flags_usage);

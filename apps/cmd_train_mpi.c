@@ -12,9 +12,10 @@
  *
  * Every --migrate-every steps after the hand-off, Gaussians whose means have left their
  * block move to the block that holds them with their Adam moments. Blocks are balanced by
- * points plus the pixels that see them (--split-by). Not done: at the hand-off the copies a
- * rank trained of a neighbour's region are dropped (the owner's kept), and ghosts are
- * owner-computed (no averaging or ADMM consensus).
+ * points, or by points plus the pixels that see them (--split-by pixels). Not done: at the hand-off the copies a
+ * rank trained of a neighbour's region are dropped (the owner's kept); ghosts are
+ * owner-computed read-only copies, or averaged with their owners at each exchange
+ * (--ghosts average); no ADMM consensus.
  * Each rank checkpoints its block (RUN/ranks/rank_K.mgsckpt); --resume continues every
  * rank. A failing rank ends the whole run (MPI_Abort) with its message; a rank that dies
  * is named by mpirun, which ends the others. */
@@ -52,8 +53,8 @@ typedef struct mpi_opts {
   const char *data, *run;
   int iters, sh_degree, white, quiet, sparse, cache_mb, strategy_adc;
   int checkpoint_every, resume, force;
-  int densify_until, exchange_every, independent, migrate_every;
-  int split_points; /* --split-by points: blocks balanced by points, not points + pixels */
+  int densify_until, exchange_every, independent, migrate_every, average;
+  int split_pixels; /* --split-by pixels: blocks balanced by points + the pixels that see them (default: points) */
   int vdb_resolution; /* > 0: the merged model's .vdb, built by blocks */
   double margin;  /* ghost margin in tiles */
   double timeout; /* seconds rank 0 waits for the other blocks after its own (<0: automatic) */
@@ -86,14 +87,15 @@ static int parse_opts(int argc, char **argv, mpi_opts *o, char *msg, size_t cap)
     else if (!strcmp(a, "--vdb-resolution")) { if (!v) goto need; o->vdb_resolution = (int)strtol(v, &end, 10); i++; if (*end || o->vdb_resolution < 8 || o->vdb_resolution > 100000) goto bad; }
     else if (!strcmp(a, "--force")) o->force = 1;
     else if (!strcmp(a, "--independent")) o->independent = 1;
-    else if (!strcmp(a, "--split-by")) { if (!v) goto need; i++; if (!strcmp(v, "points")) o->split_points = 1; else if (!strcmp(v, "pixels")) o->split_points = 0; else goto bad; }
+    else if (!strcmp(a, "--split-by")) { if (!v) goto need; i++; if (!strcmp(v, "points")) o->split_pixels = 0; else if (!strcmp(v, "pixels")) o->split_pixels = 1; else goto bad; }
     else if (!strcmp(a, "--densify-until")) { if (!v) goto need; o->densify_until = (int)strtol(v, &end, 10); i++; if (*end || o->densify_until < 1) goto bad; }
+    else if (!strcmp(a, "--ghosts")) { if (!v) goto need; i++; if (!strcmp(v, "average")) o->average = 1; else if (!strcmp(v, "owner")) o->average = 0; else goto bad; }
     else if (!strcmp(a, "--migrate-every")) { if (!v) goto need; o->migrate_every = (int)strtol(v, &end, 10); i++; if (*end || o->migrate_every < 0) goto bad; }
     else if (!strcmp(a, "--exchange-every")) { if (!v) goto need; o->exchange_every = (int)strtol(v, &end, 10); i++; if (*end || o->exchange_every < 0) goto bad; }
     else if (!strcmp(a, "--checkpoint-every")) { if (!v) goto need; o->checkpoint_every = (int)strtol(v, &end, 10); i++; if (*end || o->checkpoint_every < 0) goto bad; }
     else if (a[0] == '-') { snprintf(msg, cap, "--mpi with more than one process does not take %s yet (supported: -o, --iters, "
                                      "--sh-degree, --seed, --strategy, --white/--black, --sparse-adam/--dense-adam, "
-                                     "--image-cache-mb, --ghost-margin, --split-by, --densify-until, --exchange-every, --migrate-every, --independent, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
+                                     "--image-cache-mb, --ghost-margin, --split-by, --densify-until, --exchange-every, --migrate-every, --ghosts, --independent, --mpi-timeout, --checkpoint-every, --resume, --force, --vdb-resolution, --quiet)", a); return 0; }
     else if (!o->data) o->data = a;
     else { snprintf(msg, cap, "unexpected argument '%s'", a); return 0; }
     continue;
@@ -200,7 +202,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
   if (!ds->init_points || ds->init_points->n == 0) mgs_mpi_die(rank, "the dataset has no initial points (points3d.ply / SfM points): needed to partition the scene");
   const mgs_point_cloud *pc = ds->init_points;
   mgs_partition *part = NULL;
-  if (mgs_partition_for_dataset(ds, size, !mo->split_points, &part, &err)) mgs_mpi_die(rank, err.msg);
+  if (mgs_partition_for_dataset(ds, size, mo->split_pixels, &part, &err)) mgs_mpi_die(rank, err.msg);
   /* owned points and ghosts within the margin of the block's box */
   double m = mo->margin * part->tile;
   const double *lo = part->lo[rank], *hi = part->hi[rank];
@@ -269,6 +271,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
                                       side, mo->timeout) : NULL;
     free(side);
     if (!gh) mgs_mpi_die(rank, "out of memory");
+    mgs_mpi_ghosts_set_average(gh, mo->average);
     o.after_step = mgs_mpi_ghosts_after_step;
     o.after_step_user = gh;
   }

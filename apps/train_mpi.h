@@ -45,6 +45,10 @@ size_t mgs_mpi_ghosts_owned(const mgs_mpi_ghosts *gh); /* rows [0, owned) are th
 size_t mgs_mpi_ghosts_count(const mgs_mpi_ghosts *gh);
 unsigned long long mgs_mpi_ghosts_bytes(const mgs_mpi_ghosts *gh); /* sent by this rank so far */
 long mgs_mpi_ghosts_exchanges(const mgs_mpi_ghosts *gh);
+/* 1: ghosts train on their holders' views too and, at each exchange, every shared Gaussian
+ * becomes the mean of its owner's value and its copies' (0, default: ghosts read-only,
+ * owner-computed). */
+void mgs_mpi_ghosts_set_average(mgs_mpi_ghosts *gh, int average);
 /* Gaussians this rank sent to and received from other blocks by migration so far. */
 void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in);
 /* Collective: the largest |ghost - its owner's current value| over this rank's ghosts. */

@@ -48,6 +48,7 @@ struct mgs_mpi_ghosts {
   int explicit_limit;     /* limit came from --mpi-timeout */
   int iteration;          /* of the exchange under way (for messages) */
   int migrate_every, ckpt_every;
+  int average;            /* ghosts train too; at each exchange owner and copies are averaged */
   unsigned long long migrated_out, migrated_in;
   char *hist;             /* the layout records the sidecar holds (oldest first) */
   size_t hist_len;
@@ -88,6 +89,8 @@ void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh) {
   free(gh->sidecar); free(gh->hist);
   free(gh);
 }
+
+void mgs_mpi_ghosts_set_average(mgs_mpi_ghosts *gh, int average) { gh->average = average != 0; }
 
 void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in) {
   *out = gh ? gh->migrated_out : 0;
@@ -184,6 +187,55 @@ static void wait_bounded(mgs_mpi_ghosts *gh, MPI_Request *rqp, const char *what,
   }
   snprintf(msg + len, sizeof msg - len, "; the run is ended");
   mgs_mpi_die(gh->rank, msg);
+}
+
+/* Averaging (--ghosts average): the ghosts' current values go back to their owners (the
+   neighbourhood collective with the directions swapped), and each owner sets a shared
+   Gaussian to the mean of its own value and every copy's, so the neighbours' views train
+   it too. The owner's Adam moments stay its own. The exchange that follows sends the means
+   out. */
+static mgs_status average_into_owners(mgs_mpi_ghosts *gh, mgs_gaussians *g, mgs_error *err) {
+  const size_t dims = (size_t)gh->dims;
+  uint32_t *rows = malloc((gh->n_ghost ? gh->n_ghost : 1) * sizeof(uint32_t));
+  float *mine = malloc((gh->n_ghost ? gh->n_ghost : 1) * dims * sizeof(float));
+  float *back = malloc((gh->n_exp ? gh->n_exp : 1) * dims * sizeof(float));
+  int *slot = malloc((gh->n_own ? gh->n_own : 1) * sizeof(int));
+  double *sum = calloc((gh->n_exp ? gh->n_exp : 1) * dims, sizeof(double));
+  int *cnt = calloc(gh->n_exp ? gh->n_exp : 1, sizeof(int));
+  uint32_t *who = malloc((gh->n_exp ? gh->n_exp : 1) * sizeof(uint32_t));
+  if (!rows || !mine || !back || !slot || !sum || !cnt || !who) mgs_mpi_die(gh->rank, "out of memory for the ghost average");
+  for (size_t j = 0; j < gh->n_ghost; j++) rows[j] = (uint32_t)(gh->n_own + j);
+  pack_rows(g, rows, gh->n_ghost, gh->dims, mine);
+  MPI_Request rq;
+  if (MPI_Ineighbor_alltoallv(mine, gh->rcount, gh->rdispl, MPI_FLOAT, back, gh->scount, gh->sdispl, MPI_FLOAT, gh->graph, &rq) !=
+      MPI_SUCCESS)
+    mgs_mpi_die(gh->rank, "MPI_Ineighbor_alltoallv of the ghosts (to their owners) failed");
+  wait_bounded(gh, &rq, "ghost average", 0);
+  gh->bytes_sent += (unsigned long long)gh->n_ghost * dims * sizeof(float);
+  /* one slot per exported row (a row several neighbours hold has one slot) */
+  for (size_t i = 0; i < gh->n_own; i++) slot[i] = -1;
+  size_t n_slots = 0;
+  for (size_t j = 0; j < gh->n_exp; j++) {
+    uint32_t r = gh->exp[j];
+    if (slot[r] < 0) { slot[r] = (int)n_slots; who[n_slots++] = r; }
+    int k = slot[r];
+    cnt[k]++;
+    for (size_t c = 0; c < dims; c++) sum[(size_t)k * dims + c] += back[j * dims + c];
+  }
+  size_t off = 0;
+  for (int grp = 0; grp < MGS_PARAM_COUNT; grp++) {
+    size_t d = (size_t)mgs_param_dim((mgs_param_group)grp);
+    float *dst = mgs_gaussians_group(g, (mgs_param_group)grp);
+    for (size_t k = 0; k < n_slots; k++)
+      for (size_t c = 0; c < d; c++) {
+        float *v = dst + (size_t)who[k] * d + c;
+        *v = (float)((*v + sum[k * dims + off + c]) / (1.0 + cnt[k]));
+      }
+    off += d;
+  }
+  free(rows); free(mine); free(back); free(slot); free(sum); free(cnt); free(who);
+  (void)err;
+  return MGS_OK;
 }
 
 static mgs_status exchange(mgs_mpi_ghosts *gh, const mgs_gaussians *g, mgs_error *err) {
@@ -423,12 +475,15 @@ mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err)
   gh->iteration = it;
   fault_hang(gh->rank, it);
   if (!gh->active) return it == gh->handoff ? handoff(gh, t, err) : MGS_OK;
-  if (gh->migrate_every > 0 && (it - gh->handoff) % gh->migrate_every == 0) return migrate(gh, t, it, err);
-  if (gh->every > 0 && (it - gh->handoff) % gh->every == 0) {
-    mgs_status st = exchange(gh, mgs_trainer_model(t), err);
-    if (st) return st;
-  }
-  restore(gh, mgs_trainer_model_mut(t));
+  const int migrating = gh->migrate_every > 0 && (it - gh->handoff) % gh->migrate_every == 0;
+  const int exchanging = gh->every > 0 && (it - gh->handoff) % gh->every == 0;
+  mgs_status st;
+  /* averaging: what the copies learnt reaches the owners before the ghosts are replaced */
+  if (gh->average && (migrating || exchanging) && (st = average_into_owners(gh, mgs_trainer_model_mut(t), err))) return st;
+  if (migrating) return migrate(gh, t, it, err);
+  if (exchanging && (st = exchange(gh, mgs_trainer_model(t), err))) return st;
+  /* owner-computed ghosts are put back after every step; averaged ones train until the next exchange */
+  if (!gh->average || exchanging) restore(gh, mgs_trainer_model_mut(t));
   return MGS_OK;
 }
 

@@ -320,6 +320,27 @@ static void test_ghosts(void) {
   CHECK_MSG(jget(j, "ghost_lag_max") > 1e-6, "exchanges every 7 steps: lag %g (ghosts not read-only, or owners not trained?)",
             jget(j, "ghost_lag_max"));
   cJSON_Delete(j);
+  /* averaged ghosts: they train on their holders' views and meet their owners at each
+     exchange (equal right after one, every step here), and the model is not the
+     owner-computed one */
+  snprintf(run, sizeof run, "%s/ghosts_avg", root);
+  CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --exchange-every 1 --ghosts average --seed 1 --quiet", data, run, 2) == 0);
+  j = stats_of(run);
+  CHECK_MSG(jget(j, "ghost_lag_max") == 0, "averaged ghosts differ from their owners by %g after an exchange every step",
+            jget(j, "ghost_lag_max"));
+  cJSON_Delete(j);
+  {
+    char pa2[800], pb2[800];
+    snprintf(pa2, sizeof pa2, "%s/point_cloud/iteration_60/point_cloud.ply", run);
+    snprintf(pb2, sizeof pb2, "%s/ghosts2/point_cloud/iteration_60/point_cloud.ply", root);
+    CHECK_MSG(mgs_path_exists(pa2) && mgs_path_exists(pb2) && !same_file(pa2, pb2), "--ghosts average gave the owner-computed model");
+  }
+  {
+    int brc = sh("train --mpi '%s' -o '%s/x' --iters 60 --ghosts mean --seed 1 --quiet", data, run, -2);
+    char *blog = slurp(logp);
+    CHECK_MSG(brc != 0 && brc != 124 && blog && strstr(blog, "--ghosts"), "--ghosts mean: rc %d, log %s", brc, blog ? blog : "");
+    free(blog);
+  }
   snprintf(run, sizeof run, "%s/ghosts_indep", root);
   CHECK(sh("train --mpi '%s' -o '%s' --iters 60 --densify-until 30 --independent --seed 1 --quiet", data, run, 2) == 0);
   j = stats_of(run);
@@ -380,6 +401,7 @@ static void test_bench(void) {
   snprintf(md, sizeof md, "%s/mpi.md", out);
   char *t = slurp(md);
   CHECK_MSG(t && strstr(t, "| 2 | 2 blocks, independent | 10 |") && strstr(t, "| 2 | 2 blocks, ghosts every 10 steps | 10 |") &&
+            strstr(t, "| 2 | 2 blocks, averaged ghosts every 10 steps | 10 |") &&
             strstr(t, "| 1 | one process, same total steps | 20 |"), "mpi.md: %s", t ? t : "(none)");
   CHECK(t && !strstr(t, "| nan | nan |"));
   free(t);

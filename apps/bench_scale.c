@@ -36,7 +36,7 @@ typedef struct result {
   /* Morse analysis of the trained model (scale runs): from scratch, then again after one
      corner block of the city changed, incremental (-1: not measured) */
   /* analysis seconds: total, α, SDF, persistence; from scratch and after one block changed */
-  double an_full[4], an_incr[4], an_reused, an_leaves, an_sdf_reused, an_sdf_leaves;
+  double an_full[4], an_incr[4], an_reused, an_leaves, an_sdf_reused, an_sdf_leaves, an_pers_reused, an_pers_leaves;
 } result;
 
 /* ---- child: one training run, one line of results on stdout ---- */
@@ -108,9 +108,9 @@ static int child(const char *data, int conf, int iters, int warmup, int cache_mb
           g->opacity[i] += 0.5f;
       if (!mgs_morse_analyze(mc, g, 2, &err)) {
         const mgs_morse_result *b = mgs_morse_ctx_result(mc);
-        printf("ANALYSIS %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f %zu %zu %zu %zu\n", a.seconds[5], a.seconds[0], a.seconds[1],
+        printf("ANALYSIS %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f %zu %zu %zu %zu %zu %zu\n", a.seconds[5], a.seconds[0], a.seconds[1],
                a.seconds[2], b->seconds[5], b->seconds[0], b->seconds[1], b->seconds[2], b->leaves_reused, b->leaves,
-               b->sdf_leaves_reused, b->sdf_leaves);
+               b->sdf_leaves_reused, b->sdf_leaves, b->pers_leaves_reused, b->pers_leaves);
       }
     }
     if (err.msg[0]) fprintf(stderr, "bench scale: analysis: %s\n", err.msg);
@@ -132,11 +132,11 @@ static int run_child(const char *self, const char *data, int conf, int iters, in
   char line[512];
   int ok = 0;
   for (int k = 0; k < 4; k++) r->an_full[k] = r->an_incr[k] = -1;
-  r->an_reused = r->an_leaves = r->an_sdf_reused = r->an_sdf_leaves = -1;
+  r->an_reused = r->an_leaves = r->an_sdf_reused = r->an_sdf_leaves = r->an_pers_reused = r->an_pers_leaves = -1;
   while (fgets(line, sizeof line, p)) {
-    sscanf(line, "ANALYSIS %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &r->an_full[0], &r->an_full[1], &r->an_full[2],
+    sscanf(line, "ANALYSIS %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &r->an_full[0], &r->an_full[1], &r->an_full[2],
            &r->an_full[3], &r->an_incr[0], &r->an_incr[1], &r->an_incr[2], &r->an_incr[3], &r->an_reused, &r->an_leaves,
-           &r->an_sdf_reused, &r->an_sdf_leaves);
+           &r->an_sdf_reused, &r->an_sdf_leaves, &r->an_pers_reused, &r->an_pers_leaves);
     if (sscanf(line, "RESULT %d %d %zu %zu %lf %lf %lf %lf %lf %lf %lf %lf", &r->size, &r->conf, &r->gaussians, &r->views,
                &r->s_per_iter, &r->peak_mb, &r->listed, &r->hit_rate, &r->setup_s, &r->loss, &r->fwd_ms, &r->bwd_ms) == 12)
       ok = 1;
@@ -320,9 +320,10 @@ int mgs_bench_scale(int argc, char **argv) {
                r->hit_rate < 0 ? "-" : "", r->hit_rate < 0 ? 0.0 : r->hit_rate);
       if (r->an_full[0] >= 0)
         printf("N=%d Morse analysis %.2f s (alpha %.2f, SDF %.2f, persistence %.2f s); after one block changed, incremental "
-               "%.2f s (alpha %.2f, SDF %.2f, persistence %.2f s; %.0f of %.0f alpha leaves, %.0f of %.0f SDF leaves reused)\n",
+               "%.2f s (alpha %.2f, SDF %.2f, persistence %.2f s; %.0f of %.0f alpha leaves, %.0f of %.0f SDF leaves, %.0f of %.0f "
+               "persistence leaves reused)\n",
                sizes[s], r->an_full[0], r->an_full[1], r->an_full[2], r->an_full[3], r->an_incr[0], r->an_incr[1], r->an_incr[2],
-               r->an_incr[3], r->an_reused, r->an_leaves, r->an_sdf_reused, r->an_sdf_leaves);
+               r->an_incr[3], r->an_reused, r->an_leaves, r->an_sdf_reused, r->an_sdf_leaves, r->an_pers_reused, r->an_pers_leaves);
       fflush(stdout);
     }
   lf = fopen("/proc/loadavg", "r");
@@ -390,17 +391,19 @@ int mgs_bench_scale(int argc, char **argv) {
           per, per * 1e7 / 1073741824.0);
   fprintf(f, "\nMorse analysis of each scale run's model (α-field, SDF, persistence; 128 voxels along city 1's diagonal, "
              "the same voxel size and band at every N), from scratch and again after the Gaussians of one corner block (1/N² of "
-             "the city) changed, with `--morse-incremental` (the α leaves of that block and the SDF band around them rebuilt; "
-             "the persistence is still computed whole):\n\n| N | analysis s | α s | SDF s | persistence s | after one block "
-             "changed: analysis s | α s | SDF s | persistence s | α leaves reused | SDF leaves reused |\n"
-             "|---|---|---|---|---|---|---|---|---|---|---|\n");
+             "the city) changed, with `--morse-incremental` (the α leaves of that block and the SDF band around them rebuilt, "
+             "the persistence's critical cells of the unchanged band leaves reused; its sort and pairing run whole):\n\n"
+             "| N | analysis s | α s | SDF s | persistence s | after one block "
+             "changed: analysis s | α s | SDF s | persistence s | α leaves reused | SDF leaves reused | persistence leaves reused |\n"
+             "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int k = 0; k < n_sizes * N_CONF; k++) {
     const result *r = &results[k];
     if (!r->ok || r->conf != CONF_SCALE || r->an_full[0] < 0) continue;
-    fprintf(f, "| %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.0f of %.0f (%.0f %%) | %.0f of %.0f (%.0f %%) |\n",
+    fprintf(f, "| %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.0f of %.0f (%.0f %%) | %.0f of %.0f (%.0f %%) | %.0f of %.0f (%.0f %%) |\n",
             r->size, r->an_full[0], r->an_full[1], r->an_full[2], r->an_full[3], r->an_incr[0], r->an_incr[1], r->an_incr[2],
             r->an_incr[3], r->an_reused, r->an_leaves, r->an_leaves > 0 ? 100.0 * r->an_reused / r->an_leaves : 0.0,
-            r->an_sdf_reused, r->an_sdf_leaves, r->an_sdf_leaves > 0 ? 100.0 * r->an_sdf_reused / r->an_sdf_leaves : 0.0);
+            r->an_sdf_reused, r->an_sdf_leaves, r->an_sdf_leaves > 0 ? 100.0 * r->an_sdf_reused / r->an_sdf_leaves : 0.0,
+            r->an_pers_reused, r->an_pers_leaves, r->an_pers_leaves > 0 ? 100.0 * r->an_pers_reused / r->an_pers_leaves : 0.0);
   }
   fclose(f);
   snprintf(path, sizeof path, "%s/scale.png", out);

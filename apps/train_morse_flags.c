@@ -25,7 +25,7 @@ const char *train_morse_flags_usage =
     "      --morse-every K (500)  --morse-warmup W (3000)  --morse-until U (15000)\n"
     "      --morse-resolution R (256)  --morse-tau T (0.5)  --morse-sdf sweep|closest|mesh (sweep)\n"
     "      --gap-max G (0.05)  --min-cameras M (3)  --floater-volume F (0.01)  --floater-mass F (0.01)\n"
-    "      --max-spawn N (1000)  --morse-incremental: keep the lattice, rebuild only the α leaves and SDF band that changed\n"
+    "      --max-spawn N (1000)  --morse-incremental: keep the lattice, redo only the α leaves, SDF band and critical cells that changed\n"
     "      analysis rows: RUN/morse_analysis.csv\n";
 
 typedef enum { K_PRESET, K_LITERAL, K_SPAWN, K_PRUNE, K_TOPO, K_BETA, K_EPSP, K_EPSSIG, K_DIMS, K_EVERY, K_WARMUP,

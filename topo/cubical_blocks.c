@@ -349,7 +349,9 @@ mgs_status mgs_topo_persistence_sparse_stats(const mgs_topo_sparse *s, const mgs
   size_t band = 0;
   p.construction = (int)opts.construction;
   if (gradient) {
-    if ((st = cub_sparse_gradient_cells(&p, &f, &cells, &band, err)) != MGS_OK) goto done;
+    if (opts.cache) st = cub_sparse_gradient_cells_cached(&p, &f, opts.cache, &cells, &band, &stats.leaves_reused, err);
+    else st = cub_sparse_gradient_cells(&p, &f, &cells, &band, err);
+    if (st != MGS_OK) goto done;
     goto enumerated;
   }
   counts = malloc((p.nleaf + 1) * sizeof *counts);

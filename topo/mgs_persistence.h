@@ -57,6 +57,16 @@ typedef enum mgs_topo_filtration {
                              births/deaths are reported in -f units (birth <= death) */
 } mgs_topo_filtration;
 
+/* The gradient path's per-leaf work kept between calls (incremental analyses of a field
+ * that changed in a few places): the critical cells a leaf gives depend only on its window
+ * (its values and its neighbours' next to it), which of its neighbours are leaves, the
+ * clamp and the construction; a leaf whose window hashes as in the last call takes its
+ * cells from the cache. The sort and the pairing, which are global, run whole. The diagram
+ * equals an uncached call's (tests/topo/test_topo_cache). */
+typedef struct mgs_topo_cache mgs_topo_cache;
+mgs_topo_cache *mgs_topo_cache_create(void);
+void mgs_topo_cache_destroy(mgs_topo_cache *c);
+
 typedef struct mgs_topo_opts {
   mgs_topo_construction construction;
   mgs_topo_filtration filtration;
@@ -69,6 +79,7 @@ typedef struct mgs_topo_opts {
                              reference path, for tests and benchmarks); 0 (default): gradient */
   int d2_reduction;       /* 1: dimension-2 pairs by twist reduction of the 3-cell columns (the
                              previous path, for tests); 0 (default): union-find on the dual */
+  mgs_topo_cache *cache;  /* sparse gradient path: reuse unchanged leaves' cells (NULL: none) */
 } mgs_topo_opts;
 
 void mgs_topo_opts_default(mgs_topo_opts *o); /* V, sublevel, w = inf, 0, 1, (0,0,0) */
@@ -85,6 +96,7 @@ int mgs_topo_band_for_threshold(double max_persistence, double level, double vox
 typedef struct mgs_topo_stats {
   size_t active_voxels;   /* voxels the engine looked at (dense: all; sparse: leaf voxels) */
   size_t leaves, tiles;   /* sparse input blocks */
+  size_t leaves_reused;   /* leaves whose critical cells came from opts.cache */
   size_t cells_total;     /* cells of the full complex on the bounding box (implicit) */
   size_t band_cells;      /* cells of the band below the top value (+w), -w cells collapsed
                              along x: what the full-reduction path sorts and reduces */

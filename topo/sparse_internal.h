@@ -76,4 +76,8 @@ void cub_sparse_load_window(const prep *p, size_t b, float *w);
 /* Gradient path: the critical cells of every leaf (lower stars of its voxels, -w run ends it
  * owns) into *cells, the band cell count into *band; sets f->lo_skip. */
 mgs_status cub_sparse_gradient_cells(const prep *p, cub_field *f, cub_cells *cells, size_t *band, mgs_error *err);
+/* The same through a cache of the last call's leaves (mgs_topo_cache), which it then holds
+ * this call's; *reused: leaves taken from it. */
+mgs_status cub_sparse_gradient_cells_cached(const prep *p, cub_field *f, mgs_topo_cache *cache, cub_cells *cells, size_t *band,
+                                            size_t *reused, mgs_error *err);
 #endif

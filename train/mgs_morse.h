@@ -75,7 +75,8 @@ typedef struct mgs_morse_options {
      10 % of the one it was set from, and builds the α-field incrementally (leaves whose
      Gaussians did not change since the last analysis are copied, bit-identical to a
      full build: vdb's alpha cache) and the SDF band only around the α leaves that changed
-     (vdb's SDF cache, also bit-identical); the persistence is still computed whole.
+     (vdb's SDF cache, also bit-identical), and the persistence reuses the critical cells
+     of band leaves that did not change (topo's leaf cache); its sort and pairing run whole.
      0 (default): every analysis from scratch at diagonal / resolution. */
   int incremental;
 } mgs_morse_options;
@@ -110,6 +111,7 @@ typedef struct mgs_morse_result {
   size_t active_voxels;
   size_t leaves, leaves_reused; /* the α-field's 8³ leaves; copied from the last analysis */
   size_t sdf_leaves, sdf_leaves_reused; /* the SDF band's leaves; copied from the last analysis (incremental) */
+  size_t pers_leaves, pers_leaves_reused; /* the persistence's leaves; their critical cells reused (incremental) */
 } mgs_morse_result;
 
 typedef struct mgs_morse_ctx mgs_morse_ctx;

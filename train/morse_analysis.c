@@ -102,6 +102,7 @@ void mgs_morse_ctx_unref(mgs_morse_ctx *c) {
   drop_transient(c);
   mgs_vdb_alpha_cache_destroy(c->acache);
   mgs_vdb_sdf_cache_destroy(c->scache);
+  mgs_topo_cache_destroy(c->tcache);
   free(c->r.pairs);
   free(c->rows);
   free(c->csv_path);
@@ -356,8 +357,15 @@ mgs_status mgs_morse_analyze(mgs_morse_ctx *c, const mgs_gaussians *g, int it, m
     mgs_topo_opts to;
     mgs_topo_opts_default(&to);
     to.half_width = hw * h;
+    if (o->incremental) { /* the leaves whose band did not change keep their critical cells */
+      if (!c->tcache && !(c->tcache = mgs_topo_cache_create())) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory");
+      to.cache = c->tcache;
+    }
     mgs_diagram *d = NULL;
-    if ((st = mgs_topo_persistence_vdb(c->sdf, &to, &d, err))) return st;
+    mgs_topo_stats tst;
+    if ((st = mgs_topo_persistence_vdb_stats(c->sdf, &to, &d, &tst, err))) return st;
+    c->r.pers_leaves = tst.leaves;
+    c->r.pers_leaves_reused = tst.leaves_reused;
     c->r.pairs = calloc(d->n ? d->n : 1, sizeof(mgs_morse_pair));
     if (!c->r.pairs) { mgs_diagram_destroy(d); return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory"); }
     c->r.n = d->n;

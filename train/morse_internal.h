@@ -30,6 +30,7 @@ struct mgs_morse_ctx {
   /* incremental analyses (o.incremental) */
   struct mgs_vdb_alpha_cache *acache;
   struct mgs_vdb_sdf_cache *scache;
+  struct mgs_topo_cache *tcache;
   double h_fixed, diag_fixed;  /* voxel size kept, and the diagonal it was set from */
   /* bookkeeping */
   size_t analyses;

@@ -1,7 +1,8 @@
 /* Incremental Morse analyses (--morse-incremental, issue 12 item 4): a sheet of Gaussians
  * (a ground with bumps, like a city block) analysed twice, a corner of it changed in
  * between. The second analysis copies the α leaves the change did not reach (most of them,
- * not all) and the SDF band leaves away from the change, and its diagram equals, pair for pair, a from-scratch analysis of the changed
+ * not all), the SDF band leaves away from the change and their critical cells, and its
+ * diagram equals, pair for pair, a from-scratch analysis of the changed
  * model at the same voxel size. The voxel size is kept while the analysed box's diagonal
  * moves by under 10 % and re-derived past that. */
 #include <math.h>
@@ -76,6 +77,8 @@ static void test_changed_corner(void) {
           r->leaves, r->sdf_leaves_reused, r->sdf_leaves, r->n);
   CHECK_MSG(r->sdf_leaves_reused > 0 && r->sdf_leaves_reused < r->sdf_leaves, "%zu of %zu SDF leaves reused", r->sdf_leaves_reused,
             r->sdf_leaves);
+  CHECK_MSG(r->pers_leaves_reused > 0 && r->pers_leaves_reused < r->pers_leaves, "%zu of %zu persistence leaves reused",
+            r->pers_leaves_reused, r->pers_leaves);
   CHECK_MSG(r->leaves_reused > r->leaves / 2 && r->leaves_reused < r->leaves, "%zu of %zu leaves reused", r->leaves_reused, r->leaves);
   CHECK(r->voxel_size == h1);
   CHECK(r->n > 10);

@@ -449,6 +449,11 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       for (int r = 0; r < size; r++) mo_sum += heads_mig[2 * r], mi_sum += heads_mig[2 * r + 1];
       len += (size_t)snprintf(text + len, cap - len, "  \"migrate_every\": %d,\n  \"migrated_out\": %.0f,\n  \"migrated_in\": %.0f,\n",
                               handed ? mo->migrate_every : 0, mo_sum, mi_sum);
+      double sl = 0, sg = 0;
+      int si = mgs_mpi_ghosts_sums(gh, &sl, &sg);
+      if (si > 0)
+        len += (size_t)snprintf(text + len, cap - len, "  \"allreduce\": {\"iteration\": %d, \"gaussians\": %.0f, \"mean_loss\": %.6f},\n",
+                                si, sg, sl);
       len += (size_t)snprintf(text + len, cap - len, "  \"ranks\": %d,\n  \"gaussians\": %zu,\n  \"mean_final_loss\": %.6f,\n"
                               "  \"train_seconds_max\": %.3f,\n  \"load_imbalance\": %.3f,\n  \"bytes_gathered\": %lld,\n"
                               "  \"seconds\": %.3f,\n  \"per_rank\": [\n", size, n_all, loss_sum / size, tmax,

@@ -49,6 +49,9 @@ long mgs_mpi_ghosts_exchanges(const mgs_mpi_ghosts *gh);
  * becomes the mean of its owner's value and its copies' (0, default: ghosts read-only,
  * owner-computed). */
 void mgs_mpi_ghosts_set_average(mgs_mpi_ghosts *gh, int average);
+/* The scalars summed over every rank (MPI_Allreduce) at the last migration: the ranks'
+ * mean loss and their owned Gaussians in all; returns its iteration (-1: none yet). */
+int mgs_mpi_ghosts_sums(const mgs_mpi_ghosts *gh, double *mean_loss, double *gaussians);
 /* Gaussians this rank sent to and received from other blocks by migration so far. */
 void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in);
 /* Collective: the largest |ghost - its owner's current value| over this rank's ghosts. */

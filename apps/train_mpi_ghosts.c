@@ -49,6 +49,8 @@ struct mgs_mpi_ghosts {
   int iteration;          /* of the exchange under way (for messages) */
   int migrate_every, ckpt_every;
   int average;            /* ghosts train too; at each exchange owner and copies are averaged */
+  int sum_iteration;      /* the last MPI_Allreduce of the scalars (at a migration): its iteration, */
+  double sum_loss, sum_count; /* the ranks' mean loss and their owned Gaussians in all */
   unsigned long long migrated_out, migrated_in;
   char *hist;             /* the layout records the sidecar holds (oldest first) */
   size_t hist_len;
@@ -91,6 +93,13 @@ void mgs_mpi_ghosts_destroy(mgs_mpi_ghosts *gh) {
 }
 
 void mgs_mpi_ghosts_set_average(mgs_mpi_ghosts *gh, int average) { gh->average = average != 0; }
+
+int mgs_mpi_ghosts_sums(const mgs_mpi_ghosts *gh, double *mean_loss, double *gaussians) {
+  if (!gh || !gh->sum_iteration) return -1;
+  *mean_loss = gh->sum_loss;
+  *gaussians = gh->sum_count;
+  return gh->sum_iteration;
+}
 
 void mgs_mpi_ghosts_migrated(const mgs_mpi_ghosts *gh, unsigned long long *out, unsigned long long *in) {
   *out = gh ? gh->migrated_out : 0;
@@ -480,7 +489,20 @@ mgs_status mgs_mpi_ghosts_after_step(void *user, mgs_trainer *t, mgs_error *err)
   mgs_status st;
   /* averaging: what the copies learnt reaches the owners before the ghosts are replaced */
   if (gh->average && (migrating || exchanging) && (st = average_into_owners(gh, mgs_trainer_model_mut(t), err))) return st;
-  if (migrating) return migrate(gh, t, it, err);
+  if (migrating) {
+    if ((st = migrate(gh, t, it, err))) return st;
+    /* the scalars of the whole run: mean loss and Gaussians over every block */
+    double v[2] = {mgs_trainer_last_loss(t), (double)gh->n_own}, sum[2] = {0, 0};
+    MPI_Request rq;
+    MPI_Iallreduce(v, sum, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD, &rq);
+    wait_bounded(gh, &rq, "loss and count sum", 1);
+    gh->sum_iteration = it;
+    gh->sum_loss = sum[0] / gh->size;
+    gh->sum_count = sum[1];
+    if (gh->rank == 0)
+      mgs_info("iteration %d: %.0f Gaussians in %d blocks, mean loss %.5f", it, gh->sum_count, gh->size, gh->sum_loss);
+    return MGS_OK;
+  }
   if (exchanging && (st = exchange(gh, mgs_trainer_model(t), err))) return st;
   /* owner-computed ghosts are put back after every step; averaged ones train until the next exchange */
   if (!gh->average || exchanging) restore(gh, mgs_trainer_model_mut(t));

@@ -310,6 +310,12 @@ static void test_ghosts(void) {
     double merged = 0;
     for (int r = 0; r < cJSON_GetArraySize(pr); r++) merged += cJSON_GetObjectItem(cJSON_GetArrayItem(pr, r), "merged")->valuedouble;
     CHECK(merged == jget(j, "gaussians"));
+    /* the scalars summed over the ranks at the last migration (60): no Gaussian is born or
+       pruned after the hand-off, so the count is the merged model's */
+    cJSON *ar = cJSON_GetObjectItem(j, "allreduce");
+    CHECK_MSG(ar && cJSON_GetObjectItem(ar, "iteration")->valuedouble == 60 &&
+              cJSON_GetObjectItem(ar, "gaussians")->valuedouble == merged && cJSON_GetObjectItem(ar, "mean_loss")->valuedouble > 0,
+              "-np %d: no allreduce of the scalars at iteration 60, or a count other than %.0f", np, merged);
     moved += jget(j, "migrated_out");
     cJSON_Delete(j);
   }

@@ -302,7 +302,7 @@ static mgs_status write_sidecar(mgs_mpi_ghosts *gh, int iteration, mgs_error *er
   size_t kept = gh->hist_len - keep_from;
   char *buf = malloc(kept + rec);
   if (!buf) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
-  memcpy(buf, gh->hist + keep_from, kept);
+  if (kept) memcpy(buf, gh->hist + keep_from, kept);
   size_t len = kept;
   uint64_t h[REC_HEAD] = {GHOST_MAGIC, (uint64_t)iteration, (uint64_t)gh->handoff, (uint64_t)gh->n_own, (uint64_t)gh->n_nb,
                           (uint64_t)gh->n_exp};

@@ -283,7 +283,7 @@ mgs_status cub_sparse_gradient_cells_cached(const prep *p, cub_field *f, mgs_top
       size_t li = order[j].li;
       next.key[j] = cg.lkey[li]; next.hash[j] = cg.lhash[li]; next.band[j] = cg.lband[li];
       next.off[j] = at; next.cnt[j] = cg.lcnt[li];
-      memcpy(next.cells + at, g->out[li / GCHUNK].c + cg.lstart[li], cg.lcnt[li] * sizeof(cub_cell));
+      if (cg.lcnt[li]) memcpy(next.cells + at, g->out[li / GCHUNK].c + cg.lstart[li], cg.lcnt[li] * sizeof(cub_cell));
       at += cg.lcnt[li];
     }
     next.n = p->nleaf;

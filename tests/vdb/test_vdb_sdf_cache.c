@@ -134,7 +134,8 @@ static void run(mgs_vdb_sdf_method method) {
   CHECK_OK(mgs_vdb_sdf_from_alpha_cached(a1, &sp, c, &s1, &info, &err), &err);
   CHECK(info.whole == 0 && info.leaves_changed == 0);
   if (s1 && ref) CHECK(same_grid(s1, ref));
-  CHECK(mgs_vdb_sdf_from_alpha_cached(a1, &sp, NULL, &s0, NULL, &err) == MGS_ERR_ARG);
+  mgs_vdb_grid *none = NULL;
+  CHECK(mgs_vdb_sdf_from_alpha_cached(a1, &sp, NULL, &none, NULL, &err) == MGS_ERR_ARG && none == NULL);
   mgs_vdb_grid_destroy(a0); mgs_vdb_grid_destroy(a1); mgs_vdb_grid_destroy(s0); mgs_vdb_grid_destroy(s1);
   mgs_vdb_grid_destroy(ref);
   mgs_vdb_sdf_cache_destroy(c);

@@ -380,17 +380,6 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       for (int k = 0; k < NROW; k++) rows[NROW * r + k] = (unsigned long long)heads[NHEAD * r + 3 + k];
     }
   }
-  double *heads_lag = rank == 0 ? calloc((size_t)size, sizeof(double)) : NULL;
-  if (rank == 0) {
-    if (!heads_lag) mgs_mpi_die(rank, "out of memory");
-    for (int r = 0; r < size; r++) heads_lag[r] = heads[NHEAD * r + 9];
-  }
-  double *heads_mig = rank == 0 ? calloc((size_t)size * 2, sizeof(double)) : NULL;
-  if (rank == 0) {
-    if (!heads_mig) mgs_mpi_die(rank, "out of memory");
-    for (int r = 0; r < size; r++) heads_mig[2 * r] = heads[NHEAD * r + 10], heads_mig[2 * r + 1] = heads[NHEAD * r + 11];
-  }
-  free(heads);
   int rc = 0;
   mgs_gaussians *merged = NULL;
   if (rank == 0) {
@@ -440,13 +429,13 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       if (!path || !text) mgs_mpi_die(rank, "out of memory");
       unsigned long long xbytes = 0;
       double lag_max = 0;
-      for (int r = 0; r < size; r++) { xbytes += rows[NROW * r + 5]; lag_max = fmax(lag_max, heads_lag[r]); }
+      for (int r = 0; r < size; r++) { xbytes += rows[NROW * r + 5]; lag_max = fmax(lag_max, heads[NHEAD * r + 9]); }
       int steps_after = handed ? mo->iters - handoff : 0;
       len += (size_t)snprintf(text + len, cap - len, "{\n  \"handoff\": %d,\n  \"exchange_every\": %d,\n  \"bytes_exchanged\": %llu,\n"
                               "  \"bytes_exchanged_per_step\": %.1f,\n  \"ghost_lag_max\": %.9g,\n", handed ? handoff : -1,
                               handed ? mo->exchange_every : 0, xbytes, steps_after > 0 ? (double)xbytes / steps_after : 0.0, lag_max);
       double mo_sum = 0, mi_sum = 0;
-      for (int r = 0; r < size; r++) mo_sum += heads_mig[2 * r], mi_sum += heads_mig[2 * r + 1];
+      for (int r = 0; r < size; r++) mo_sum += heads[NHEAD * r + 10], mi_sum += heads[NHEAD * r + 11];
       len += (size_t)snprintf(text + len, cap - len, "  \"migrate_every\": %d,\n  \"migrated_out\": %.0f,\n  \"migrated_in\": %.0f,\n",
                               handed ? mo->migrate_every : 0, mo_sum, mi_sum);
       double sl = 0, sg = 0;
@@ -462,7 +451,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
         len += (size_t)snprintf(text + len, cap - len, "    {\"owned_init\": %llu, \"ghosts_init\": %llu, \"views\": %llu, \"merged\": %llu, "
                                 "\"ghosts\": %llu, \"bytes_sent\": %llu, \"migrated_out\": %.0f, \"migrated_in\": %.0f}%s\n",
                                 rows[NROW * r], rows[NROW * r + 1], rows[NROW * r + 2], rows[NROW * r + 3], rows[NROW * r + 4],
-                                rows[NROW * r + 5], heads_mig[2 * r], heads_mig[2 * r + 1], r + 1 < size ? "," : "");
+                                rows[NROW * r + 5], heads[NHEAD * r + 10], heads[NHEAD * r + 11], r + 1 < size ? "," : "");
       len += (size_t)snprintf(text + len, cap - len, "  ]\n}\n");
       st = mgs_write_file_atomic(path, text, len, &err);
       free(path); free(text);
@@ -487,7 +476,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     free(vdb);
   }
   mgs_gaussians_destroy(merged);
-  free(all); free(counts); free(displs); free(rows); free(heads_lag); free(heads_mig);
+  free(all); free(counts); free(displs); free(rows); free(heads);
   mgs_trainer_destroy(t);
   mgs_mpi_ghosts_destroy(gh);
   free(ckpt);

@@ -111,6 +111,18 @@ static int32_t sparse_lo_skip(const void *ctx, int32_t a, int32_t b, int32_t c) 
   return 2 * (x & ~7);
 }
 
+/* The chunks' cells (total in all) into one list, in chunk order; 0 when out of memory. */
+static int concat_chunks(const cub_cells *chunks, size_t nch, size_t total, cub_cells *cells) {
+  cells->c = malloc((total ? total : 1) * sizeof *cells->c);
+  cells->cap = total ? total : 1;
+  if (!cells->c) return 0;
+  for (size_t i = 0; i < nch; i++) {
+    if (chunks[i].n) memcpy(cells->c + cells->n, chunks[i].c, chunks[i].n * sizeof *cells->c);
+    cells->n += chunks[i].n;
+  }
+  return 1;
+}
+
 mgs_status cub_sparse_gradient_cells(const prep *p, cub_field *f, cub_cells *cells, size_t *band, mgs_error *err) {
   *band = 0;
   f->lo_skip = sparse_lo_skip;
@@ -123,17 +135,7 @@ mgs_status cub_sparse_gradient_cells(const prep *p, cub_field *f, cub_cells *cel
     mgs_parallel_for(0, nch, 1, enum_gradient, &g);
     for (size_t i = 0; i < nch; i++) { total += g.out[i].n; *band += g.band[i]; failed |= g.failed[i]; }
   }
-  if (!failed) {
-    cells->c = malloc((total ? total : 1) * sizeof *cells->c);
-    cells->cap = total ? total : 1;
-    failed = !cells->c;
-  }
-  if (!failed) {
-    for (size_t i = 0; i < nch; i++) {
-      if (g.out[i].n) memcpy(cells->c + cells->n, g.out[i].c, g.out[i].n * sizeof *cells->c);
-      cells->n += g.out[i].n;
-    }
-  }
+  if (!failed) failed = !concat_chunks(g.out, nch, total, cells);
   if (g.out)
     for (size_t i = 0; i < nch; i++) free(g.out[i].c);
   free(g.out); free(g.band); free(g.failed);
@@ -259,16 +261,8 @@ mgs_status cub_sparse_gradient_cells_cached(const prep *p, cub_field *f, mgs_top
     mgs_parallel_for(0, nch, 1, enum_gradient_cached, &cg);
     for (size_t i = 0; i < nch; i++) { total += g->out[i].n; *band += g->band[i]; failed |= g->failed[i]; }
   }
+  if (!failed) failed = !concat_chunks(g->out, nch, total, cells);
   if (!failed) {
-    cells->c = malloc((total ? total : 1) * sizeof *cells->c);
-    cells->cap = total ? total : 1;
-    failed = !cells->c;
-  }
-  if (!failed) {
-    for (size_t i = 0; i < nch; i++) {
-      if (g->out[i].n) memcpy(cells->c + cells->n, g->out[i].c, g->out[i].n * sizeof *cells->c);
-      cells->n += g->out[i].n;
-    }
     /* this call's leaves become the cache: sorted by key, cells in that order */
     next.key = malloc(nl * sizeof(uint64_t)); next.hash = malloc(nl * sizeof(uint64_t));
     next.band = malloc(nl * sizeof(size_t)); next.off = malloc(nl * sizeof(size_t)); next.cnt = malloc(nl * sizeof(size_t));

@@ -58,13 +58,18 @@ FloatGrid::Ptr empty_level_set(const FloatGrid &like, float bg) {
   return g;
 }
 
-// Clamp |d| to the band: voxels beyond it become inactive ±bg; background bg; tiles pruned.
-void trim_band(FloatGrid &g, float bg) {
-  for (auto it = g.tree().beginValueOn(); it; ++it) {
+// Voxels with |d| beyond the band become inactive ±bg.
+void clamp_band(FloatTree &t, float bg) {
+  for (auto it = t.beginValueOn(); it; ++it) {
     const float d = *it;
     if (d >= bg) it.setValueOff(), it.setValue(bg);
     else if (d <= -bg) it.setValueOff(), it.setValue(-bg);
   }
+}
+
+// Clamp |d| to the band: voxels beyond it become inactive ±bg; background bg; tiles pruned.
+void trim_band(FloatGrid &g, float bg) {
+  clamp_band(g.tree(), bg);
   tools::changeLevelSetBackground(g.tree(), bg);
   tools::pruneLevelSet(g.tree());
 }
@@ -144,12 +149,17 @@ FloatGrid::Ptr sdf_mesh(const FloatGrid &alpha_in, float tau, int w, int refine)
   return g;
 }
 
+// fogToSdf on the α-field widened by the band (outside the kσ ellipsoids A is below τ, so
+// the outer band needs the room); null if it found no surface.
+FloatGrid::Ptr sweep_field(const FloatGrid &alpha, float tau, int w) {
+  auto dom = alpha.deepCopy();
+  tools::dilateActiveValues(dom->tree(), w + 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
+  return tools::fogToSdf(*dom, tau, 1);
+}
+
 FloatGrid::Ptr sdf_sweep(const FloatGrid &alpha, float tau, int w) {
   const float bg = (float)(w * alpha.voxelSize()[0]);
-  auto dom = alpha.deepCopy();
-  // Outside the kσ ellipsoids A is below τ; widen the domain so the outer band exists.
-  tools::dilateActiveValues(dom->tree(), w + 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
-  auto g = tools::fogToSdf(*dom, tau, 1);
+  auto g = sweep_field(alpha, tau, w);
   if (!g) return empty_level_set(alpha, bg);
   trim_band(*g, bg);
   return g;
@@ -159,16 +169,9 @@ FloatGrid::Ptr sdf_sweep(const FloatGrid &alpha, float tau, int w) {
 // sweep's leaves with |d| clamped to the band; null if the sweep found no surface or left
 // tiles (then only a whole build is used).
 FloatTree::Ptr sdf_sweep_raw(const FloatGrid &alpha, float tau, int w) {
-  const float bg = (float)(w * alpha.voxelSize()[0]);
-  auto dom = alpha.deepCopy();
-  tools::dilateActiveValues(dom->tree(), w + 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
-  auto g = tools::fogToSdf(*dom, tau, 1);
+  auto g = sweep_field(alpha, tau, w);
   if (!g || g->tree().activeTileCount() > 0) return nullptr;
-  for (auto it = g->tree().beginValueOn(); it; ++it) {
-    const float d = *it;
-    if (d >= bg) it.setValueOff(), it.setValue(bg);
-    else if (d <= -bg) it.setValueOff(), it.setValue(-bg);
-  }
+  clamp_band(g->tree(), (float)(w * alpha.voxelSize()[0]));
   // only the leaves carry the band; the tiles above them are made again by the finish
   auto raw = std::make_shared<FloatTree>(g->tree().background());
   for (auto l = g->tree().cbeginLeaf(); l; ++l) raw->addLeaf(new FloatTree::LeafNodeType(*l));

@@ -11,24 +11,7 @@
 #include "core/mgs_core.h"
 #include "topo/mgs_persistence.h"
 #include "vdb/mgs_vdb.h"
-
-static mgs_gaussians *scene(size_t n) {
-  mgs_gaussians *g = mgs_gaussians_create(n, 0);
-  size_t first;
-  if (!g || mgs_gaussians_append(g, n, &first, NULL)) exit(2);
-  mgs_rng r;
-  mgs_rng_init(&r, 13, 1);
-  for (size_t i = 0; i < n; i++) {
-    for (int k = 0; k < 3; k++) {
-      g->mean[3 * i + k] = (float)(2 * mgs_rng_uniform(&r) - 1);
-      g->log_scale[3 * i + k] = (float)log(0.01 + (k == 2 ? 0.01 : 0.06) * mgs_rng_uniform(&r));
-    }
-    for (int k = 0; k < 4; k++) g->rot[4 * i + k] = (float)mgs_rng_normal(&r);
-    g->opacity[i] = (float)(3 * mgs_rng_uniform(&r) - 1);
-  }
-  for (int k = 0; k < 3; k++) { g->mean[k] = -1.2f; g->mean[3 + k] = 1.2f; }
-  return g;
-}
+#include "vdb/vdb_test_util.h"
 
 static mgs_vdb_grid *sdf_of(const mgs_gaussians *g) {
   mgs_vdb_alpha_params ap;
@@ -54,7 +37,7 @@ static int same(const mgs_diagram *a, const mgs_diagram *b) {
 }
 
 static void run(mgs_topo_construction cons) {
-  mgs_gaussians *g = scene(6000);
+  mgs_gaussians *g = vt_random_gaussians(6000, 13, 0.06, 0.01, -1, 3);
   mgs_vdb_grid *s0 = sdf_of(g);
   for (size_t i = 2; i < g->n; i++)
     if (g->mean[3 * i] > 0.6f && g->mean[3 * i + 1] > 0.6f && g->mean[3 * i + 2] > 0.6f) g->opacity[i] += 1.0f, g->mean[3 * i] -= 0.02f;

@@ -8,44 +8,10 @@
 #include "mgs_test.h"
 #include "core/mgs_core.h"
 #include "vdb/mgs_vdb.h"
-
-static mgs_gaussians *scene(size_t n) {
-  mgs_gaussians *g = mgs_gaussians_create(n, 0);
-  size_t first;
-  if (!g || mgs_gaussians_append(g, n, &first, NULL)) exit(2);
-  mgs_rng r;
-  mgs_rng_init(&r, 5, 1);
-  for (size_t i = 0; i < n; i++) {
-    for (int k = 0; k < 3; k++) {
-      g->mean[3 * i + k] = (float)(2 * mgs_rng_uniform(&r) - 1);
-      g->log_scale[3 * i + k] = (float)log(0.01 + 0.03 * mgs_rng_uniform(&r));
-    }
-    for (int k = 0; k < 4; k++) g->rot[4 * i + k] = (float)mgs_rng_normal(&r);
-    g->opacity[i] = (float)(2 * mgs_rng_uniform(&r) - 1);
-  }
-  /* two fixed corners hold the means' box (so the lattice stays when others move) */
-  for (int k = 0; k < 3; k++) { g->mean[k] = -1.2f; g->mean[3 + k] = 1.2f; }
-  return g;
-}
-
-/* 1 when both grids have the same leaves, masks and values, bit for bit */
-static int same_grid(const mgs_vdb_grid *a, const mgs_vdb_grid *b) {
-  size_t na = mgs_vdb_leaf_count(a), nb = mgs_vdb_leaf_count(b);
-  if (na != nb) return 0;
-  mgs_vdb_leaf_view *la = malloc((na + 1) * sizeof *la), *lb = malloc((nb + 1) * sizeof *lb);
-  mgs_vdb_leaf_views(a, la, na);
-  mgs_vdb_leaf_views(b, lb, nb);
-  int same = 1;
-  for (size_t i = 0; i < na && same; i++) {
-    same = !memcmp(la[i].origin, lb[i].origin, sizeof la[i].origin) && !memcmp(la[i].active_mask, lb[i].active_mask, 64) &&
-           !memcmp(la[i].values, lb[i].values, 512 * sizeof(float));
-  }
-  free(la); free(lb);
-  return same;
-}
+#include "vdb/vdb_test_util.h"
 
 static void test_cache(void) {
-  mgs_gaussians *g = scene(4000);
+  mgs_gaussians *g = vt_random_gaussians(4000, 5, 0.03, 0.03, -1, 2);
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
   ap.voxel_size = 0.02;
@@ -60,7 +26,7 @@ static void test_cache(void) {
   /* unchanged: every leaf copied, the same grid */
   CHECK_OK(mgs_vdb_alpha_field_cached(g, &ap, c, &b, &info, &err), &err);
   CHECK_MSG(info.leaves_reused == leaves, "unchanged model: %zu of %zu leaves reused", info.leaves_reused, leaves);
-  if (a && b) CHECK(same_grid(a, b));
+  if (a && b) CHECK(vt_same_leaves(a, b));
   mgs_vdb_grid_destroy(b);
   b = NULL;
   /* a few Gaussians in one corner move and change opacity; one is removed (indices shift) */
@@ -82,7 +48,7 @@ static void test_cache(void) {
           info.leaves);
   CHECK(changed > 0);
   CHECK_MSG(info.leaves_reused > info.leaves / 2 && info.leaves_reused < info.leaves, "reused %zu of %zu", info.leaves_reused, info.leaves);
-  if (b && ref) CHECK_MSG(same_grid(b, ref), "the cached build differs from a build from scratch");
+  if (b && ref) CHECK_MSG(vt_same_leaves(b, ref), "the cached build differs from a build from scratch");
   mgs_vdb_grid_destroy(b);
   b = NULL;
   /* another voxel size: nothing reused, still right */
@@ -92,7 +58,7 @@ static void test_cache(void) {
   CHECK_OK(mgs_vdb_alpha_field_cached(g, &ap, c, &b, &info, &err), &err);
   CHECK(info.leaves_reused == 0);
   CHECK_OK(mgs_vdb_alpha_field(g, &ap, &ref, NULL, &err), &err);
-  if (b && ref) CHECK(same_grid(b, ref));
+  if (b && ref) CHECK(vt_same_leaves(b, ref));
   mgs_vdb_grid_destroy(a); mgs_vdb_grid_destroy(b); mgs_vdb_grid_destroy(ref);
   CHECK(mgs_vdb_alpha_field_cached(g, &ap, NULL, &b, NULL, &err) == MGS_ERR_ARG);
   mgs_vdb_alpha_cache_destroy(c);

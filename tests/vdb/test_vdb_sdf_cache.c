@@ -12,38 +12,12 @@
 #include "core/mgs_core.h"
 #include "topo/mgs_persistence.h"
 #include "vdb/mgs_vdb.h"
+#include "vdb/vdb_test_util.h"
 
-/* Random flat and round Gaussians in [-1, 1]^3 (floaters, overlaps, thin sheets: the kind
-   of field a trained model gives), two fixed corners holding the box. */
-static mgs_gaussians *scene(size_t n) {
-  mgs_gaussians *g = mgs_gaussians_create(n, 0);
-  size_t first;
-  if (!g || mgs_gaussians_append(g, n, &first, NULL)) exit(2);
-  mgs_rng r;
-  mgs_rng_init(&r, 11, 1);
-  for (size_t i = 0; i < n; i++) {
-    for (int k = 0; k < 3; k++) {
-      g->mean[3 * i + k] = (float)(2 * mgs_rng_uniform(&r) - 1);
-      g->log_scale[3 * i + k] = (float)log(0.01 + (k == 2 ? 0.01 : 0.06) * mgs_rng_uniform(&r));
-    }
-    for (int k = 0; k < 4; k++) g->rot[4 * i + k] = (float)mgs_rng_normal(&r);
-    g->opacity[i] = (float)(3 * mgs_rng_uniform(&r) - 1);
-  }
-  for (int k = 0; k < 3; k++) { g->mean[k] = -1.2f; g->mean[3 + k] = 1.2f; }
-  return g;
-}
-
+/* leaves, masks, values and the tiles above them, bit for bit */
 static int same_grid(const mgs_vdb_grid *a, const mgs_vdb_grid *b) {
-  size_t na = mgs_vdb_leaf_count(a), nb = mgs_vdb_leaf_count(b);
-  if (na != nb) { fprintf(stderr, "  leaves %zu vs %zu\n", na, nb); return 0; }
-  mgs_vdb_leaf_view *la = malloc((na + 1) * sizeof *la), *lb = malloc((nb + 1) * sizeof *lb);
-  mgs_vdb_leaf_views(a, la, na);
-  mgs_vdb_leaf_views(b, lb, nb);
+  if (!vt_same_leaves(a, b)) { fprintf(stderr, "  leaves differ\n"); return 0; }
   int same = 1;
-  for (size_t i = 0; i < na && same; i++)
-    same = !memcmp(la[i].origin, lb[i].origin, sizeof la[i].origin) && !memcmp(la[i].active_mask, lb[i].active_mask, 64) &&
-           !memcmp(la[i].values, lb[i].values, 512 * sizeof(float));
-  free(la); free(lb);
   size_t ta = mgs_vdb_tiles(a, MGS_VDB_TILES_ALL, 1, NULL, 0), tb = mgs_vdb_tiles(b, MGS_VDB_TILES_ALL, 1, NULL, 0);
   if (ta != tb) { fprintf(stderr, "  tiles %zu vs %zu\n", ta, tb); return 0; }
   mgs_vdb_tile *xa = malloc((ta + 1) * sizeof *xa), *xb = malloc((tb + 1) * sizeof *xb);
@@ -73,7 +47,7 @@ static int same_diagram(const mgs_vdb_grid *a, const mgs_vdb_grid *b, double hw)
 }
 
 static void run(mgs_vdb_sdf_method method) {
-  mgs_gaussians *g = scene(6000);
+  mgs_gaussians *g = vt_random_gaussians(6000, 11, 0.06, 0.01, -1, 3);
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
   ap.voxel_size = 0.015;

@@ -2,7 +2,10 @@
 #ifndef VDB_TEST_UTIL_H
 #define VDB_TEST_UTIL_H
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 #include "core/mgs_gaussians.h"
+#include "core/mgs_rng.h"
 #include "vdb/mgs_vdb.h"
 
 /* Appends a Gaussian with std-devs s, rotation q (w,x,y,z), opacity alpha. */
@@ -33,5 +36,45 @@ static inline double vt_ray_zero(const mgs_vdb_grid *sdf, const double o[3], con
     if ((vm < 0) == (v0 < 0)) { t0 = tm; v0 = vm; } else { t1 = tm; }
   }
   return 0.5 * (t0 + t1);
+}
+
+/* n random Gaussians in [-1, 1]^3 (seed): std-devs 0.01 + scale_xy (x, y) or scale_z (z)
+ * times a uniform draw, random rotations, opacity logits opacity_lo + opacity_span x a
+ * uniform draw: floaters, overlaps and thin sheets, the kind of field a trained model
+ * gives. Two fixed corners (+-1.2) hold the means' box, so the lattice stays when others
+ * move. Exits on allocation failure. */
+static inline mgs_gaussians *vt_random_gaussians(size_t n, uint64_t seed, double scale_xy, double scale_z, double opacity_lo,
+                                                 double opacity_span) {
+  mgs_gaussians *g = mgs_gaussians_create(n, 0);
+  size_t first;
+  if (!g || mgs_gaussians_append(g, n, &first, NULL)) exit(2);
+  mgs_rng r;
+  mgs_rng_init(&r, seed, 1);
+  for (size_t i = 0; i < n; i++) {
+    for (int k = 0; k < 3; k++) {
+      g->mean[3 * i + k] = (float)(2 * mgs_rng_uniform(&r) - 1);
+      g->log_scale[3 * i + k] = (float)log(0.01 + (k == 2 ? scale_z : scale_xy) * mgs_rng_uniform(&r));
+    }
+    for (int k = 0; k < 4; k++) g->rot[4 * i + k] = (float)mgs_rng_normal(&r);
+    g->opacity[i] = (float)(opacity_span * mgs_rng_uniform(&r) + opacity_lo);
+  }
+  for (int k = 0; k < 3; k++) { g->mean[k] = -1.2f; g->mean[3 + k] = 1.2f; }
+  return g;
+}
+
+/* 1 when both grids have the same leaves, masks and values, bit for bit */
+static inline int vt_same_leaves(const mgs_vdb_grid *a, const mgs_vdb_grid *b) {
+  size_t na = mgs_vdb_leaf_count(a), nb = mgs_vdb_leaf_count(b);
+  if (na != nb) return 0;
+  mgs_vdb_leaf_view *la = malloc((na + 1) * sizeof *la), *lb = malloc((nb + 1) * sizeof *lb);
+  if (!la || !lb) exit(2);
+  mgs_vdb_leaf_views(a, la, na);
+  mgs_vdb_leaf_views(b, lb, nb);
+  int same = 1;
+  for (size_t i = 0; i < na && same; i++)
+    same = !memcmp(la[i].origin, lb[i].origin, sizeof la[i].origin) && !memcmp(la[i].active_mask, lb[i].active_mask, 64) &&
+           !memcmp(la[i].values, lb[i].values, 512 * sizeof(float));
+  free(la); free(lb);
+  return same;
 }
 #endif

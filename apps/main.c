@@ -35,9 +35,6 @@ int main(int argc, char **argv) {
   if (argc < 2) { usage(stderr); return 2; }
   if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) { usage(stdout); return 0; }
   if (!strcmp(argv[1], "--version")) { printf("morsegs 0.1.0\n"); return 0; }
-  if (!strcmp(argv[1], "train")) /* `train --mpi`: under mpirun (apps/cmd_train_mpi.c) */
-    for (int i = 2; i < argc; i++)
-      if (!strcmp(argv[i], "--mpi")) return mgs_cmd_train_mpi(argc - 1, argv + 1);
   for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
     if (!strcmp(argv[1], commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
   fprintf(stderr, "morsegs: unknown command '%s'\n", argv[1]);

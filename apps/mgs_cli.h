@@ -5,6 +5,7 @@
 #ifndef MGS_CLI_H
 #define MGS_CLI_H
 #include "core/mgs_error.h"
+#include "train/mgs_config.h"
 
 int mgs_cmd_demo(int argc, char **argv);
 int mgs_cmd_scene(int argc, char **argv);
@@ -25,7 +26,9 @@ int mgs_bench_topo(int argc, char **argv);
 int mgs_bench_diagram(int argc, char **argv);
 int mgs_bench_scale(int argc, char **argv);
 int mgs_bench_mpi(int argc, char **argv);
-int mgs_cmd_train_mpi(int argc, char **argv); /* apps/cmd_train_mpi.c */
+/* `morsegs train` on a parsed config: the serial trainer, and `--mpi` (apps/cmd_train_mpi.c) */
+int mgs_cmd_train_config(mgs_train_config *c, const char *data);
+int mgs_cmd_train_mpi(mgs_train_config *c, const char *data);
 
 /* Prints "morsegs <cmd>: <message>" to stderr and returns 1 (for `return mgs_cli_fail(...)`). */
 int mgs_cli_fail(const char *cmd, const mgs_error *err);

@@ -88,6 +88,11 @@ double mgs_morse_eps_in_use(const mgs_morse_options *o, double diagonal);
 /* Range checks (what `morsegs train` reports before training): MGS_ERR_ARG naming the
  * flag (`--morse-every` etc., as apps/train_morse_flags.c spells them) and the range. */
 mgs_status mgs_morse_options_check(const mgs_morse_options *o, int iterations, mgs_error *err);
+/* The analysis grids' memory: a band of 2w+1 voxels around a surface of about 6 r² voxels
+ * (a cube's faces; trained surfaces are larger, so 4x that), ~40 bytes per band voxel for
+ * the α-field, the SDF and the persistence engine together. MGS_ERR_ARG when that exceeds
+ * 60 % of this machine's memory, naming --morse-resolution. */
+mgs_status mgs_morse_grid_budget_check(const mgs_morse_options *o, mgs_error *err);
 
 /* One pair of the last analysis, with what the strategy and the term read. */
 typedef struct mgs_morse_pair {

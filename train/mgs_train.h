@@ -192,6 +192,8 @@ void mgs_trainer_destroy(mgs_trainer *t);
 mgs_status mgs_trainer_add_term(mgs_trainer *t, struct mgs_term *term, mgs_error *err);
 /* The last iteration's weighted value of each term (in the order added); n_out <= count. */
 size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out);
+/* The k-th term's name (its ops' name), NULL past the last. */
+const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k);
 /* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */
 mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err);
 /* Steps until `iterations`, drawing progress, writing periodic checkpoints, checking the
@@ -213,16 +215,21 @@ mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t); /* tests inject values */
  * are appended at *first with zero Adam moments, for the caller to fill through
  * mgs_trainer_model_mut. Tiles and strategy state follow the new count. */
 mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t add, size_t *first, mgs_error *err);
-/* The Adam moments row for row with the model (a Gaussian that moves between distributed
- * blocks takes its moments along). */
-mgs_adam *mgs_trainer_adam_mut(mgs_trainer *t);
+/* One Gaussian's whole training state as a row of floats: its parameters, then Adam's
+ * first and second moments, group by group (mgs_trainer_state_floats() floats). A Gaussian
+ * that moves between distributed blocks takes its state along this way; step counts and
+ * learning rates stay with the trainer. */
+size_t mgs_trainer_state_floats(const mgs_trainer *t);
+void mgs_trainer_get_state(const mgs_trainer *t, size_t i, float *row);
+void mgs_trainer_set_state(mgs_trainer *t, size_t i, const float *row);
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
 double mgs_trainer_last_loss(const mgs_trainer *t);
 /* The learning rate the last iteration used for a parameter group. */
 double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group);
-/* Wall seconds spent so far in: 0 forward, 1 loss, 2 backward, 3 strategy, 4 Adam (in 2
- * on iterations where the two run fused), 5 loss terms (train/mgs_term.h). */
-#define MGS_TRAIN_PHASES 6
+/* Wall seconds spent so far in each phase (Adam is counted in the backward on iterations
+ * where the two run fused; terms = the loss terms of train/mgs_term.h). */
+typedef enum { MGS_PHASE_FORWARD, MGS_PHASE_LOSS, MGS_PHASE_BACKWARD, MGS_PHASE_STRATEGY, MGS_PHASE_ADAM,
+               MGS_PHASE_TERMS, MGS_TRAIN_PHASES } mgs_train_phase;
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]);
 /* Image-cache figures (zeros without a cache): hits, misses, peak resident bytes. */
 void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *misses, size_t *peak_bytes);

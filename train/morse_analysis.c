@@ -39,6 +39,20 @@ void mgs_morse_options_default(mgs_morse_options *o) {
   o->min_bar = 0.5;
 }
 
+mgs_status mgs_morse_grid_budget_check(const mgs_morse_options *o, mgs_error *err) {
+  int hw = mgs_topo_band_for_threshold(mgs_morse_eps_in_use(o, 1.0), o->spawn == MGS_MORSE_SPAWN_GAPS ? o->gap_max : 0,
+                                       1.0 / o->resolution);
+  double bytes = 4.0 * 6.0 * (double)o->resolution * o->resolution * (2.0 * hw + 1) * 40.0;
+  long pages = sysconf(_SC_PHYS_PAGES), psize = sysconf(_SC_PAGE_SIZE);
+  double phys = pages > 0 && psize > 0 ? (double)pages * (double)psize : 8e9;
+  if (bytes > 0.6 * phys)
+    return mgs_error_set(err, MGS_ERR_ARG,
+                         "--morse-resolution %d needs about %.1f GB for the analysis grids (band %d voxels), more than "
+                         "60%% of this machine's %.1f GB; lower it",
+                         o->resolution, bytes / 1e9, hw, phys / 1e9);
+  return MGS_OK;
+}
+
 mgs_status mgs_morse_options_check(const mgs_morse_options *o, int iterations, mgs_error *err) {
 #define RANGE(cond, ...) if (!(cond)) return mgs_error_set(err, MGS_ERR_ARG, __VA_ARGS__)
   RANGE(o->every >= 1 && o->every <= 1000000, "--morse-every must be in 1..1000000 (got %d)", o->every);

@@ -230,11 +230,59 @@ static mgs_status topo_model_grad(void *self, mgs_term_step *s, mgs_error *err) 
   return st;
 }
 
+/* The candidate lists go into checkpoints too: they are built from the model of the
+   iteration they were built at, so a resumed run must not rebuild them from a later one. */
+static int gather_save(const topo_term *t, FILE *f) {
+  uint8_t has = t->gat.start != NULL;
+  if (fwrite(&has, 1, 1, f) != 1) return 0;
+  if (!has) return 1;
+  int32_t head[2] = {t->built_analysis, t->built_it};
+  uint64_t sizes[3] = {t->built_n, t->n_ends, t->gat.n};
+  size_t nidx = t->gat.start[t->gat.n];
+  return fwrite(head, sizeof head, 1, f) == 1 && fwrite(sizes, sizeof sizes, 1, f) == 1 &&
+         fwrite(t->end_pair, sizeof(size_t), t->n_ends, f) == t->n_ends &&
+         fwrite(t->pts, 3 * sizeof(double), t->n_ends, f) == t->n_ends &&
+         fwrite(t->gat.start, sizeof(size_t), t->gat.n + 1, f) == t->gat.n + 1 &&
+         (nidx == 0 || fwrite(t->gat.idx, sizeof(size_t), nidx, f) == nidx);
+}
+
+static mgs_status gather_load(topo_term *t, FILE *f, mgs_error *err) {
+  uint8_t has = 0;
+  if (fread(&has, 1, 1, f) != 1 || !has) return MGS_OK; /* none, or a checkpoint made before they were kept */
+  int32_t head[2];
+  uint64_t sizes[3];
+  if (fread(head, sizeof head, 1, f) != 1 || fread(sizes, sizeof sizes, 1, f) != 1 || sizes[1] > ((uint64_t)1 << 32) ||
+      sizes[2] > ((uint64_t)1 << 32))
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss' candidate lists are damaged");
+  t->built_analysis = head[0];
+  t->built_it = head[1];
+  t->built_n = (size_t)sizes[0];
+  t->n_ends = (size_t)sizes[1];
+  t->gat.n = (size_t)sizes[2];
+  t->end_pair = malloc((t->n_ends + 1) * sizeof(size_t));
+  t->pts = malloc((t->n_ends + 1) * 3 * sizeof(double));
+  t->gat.start = malloc((t->gat.n + 1) * sizeof(size_t));
+  if (!t->end_pair || !t->pts || !t->gat.start) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  if (fread(t->end_pair, sizeof(size_t), t->n_ends, f) != t->n_ends || fread(t->pts, 3 * sizeof(double), t->n_ends, f) != t->n_ends ||
+      fread(t->gat.start, sizeof(size_t), t->gat.n + 1, f) != t->gat.n + 1 || t->gat.start[t->gat.n] > ((size_t)1 << 40))
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss' candidate lists are truncated");
+  size_t nidx = t->gat.start[t->gat.n];
+  t->gat.idx = malloc((nidx + 1) * sizeof(size_t));
+  if (!t->gat.idx) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  if (nidx && fread(t->gat.idx, sizeof(size_t), nidx, f) != nidx)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss' candidate lists are truncated");
+  for (size_t k = 0; k < nidx; k++)
+    if (t->gat.idx[k] >= t->built_n) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: a candidate Gaussian index is out of range");
+  return MGS_OK;
+}
+
 static mgs_status topo_save(void *self, FILE *f, mgs_error *err) {
   topo_term *t = self;
   uint8_t own = (uint8_t)t->owns_state;
   if (fwrite(&own, 1, 1, f) != 1) return mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
-  return own ? mgs_morse_ctx_save(t->ctx, f, err) : MGS_OK;
+  mgs_status st = own ? mgs_morse_ctx_save(t->ctx, f, err) : MGS_OK;
+  if (st == MGS_OK && !gather_save(t, f)) st = mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
+  return st;
 }
 
 static mgs_status topo_load(void *self, FILE *f, mgs_error *err) {
@@ -243,7 +291,10 @@ static mgs_status topo_load(void *self, FILE *f, mgs_error *err) {
   if (fread(&own, 1, 1, f) != 1 || own != (uint8_t)t->owns_state)
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss state does not match this run's setup");
   topo_clear(t);
-  return own ? mgs_morse_ctx_load(t->ctx, f, err) : MGS_OK;
+  mgs_status st = own ? mgs_morse_ctx_load(t->ctx, f, err) : MGS_OK;
+  if (st == MGS_OK) st = gather_load(t, f, err);
+  if (st) topo_clear(t);
+  return st;
 }
 
 static void topo_destroy(void *self) {

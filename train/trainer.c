@@ -128,6 +128,10 @@ mgs_status mgs_trainer_add_term(mgs_trainer *t, mgs_term *term, mgs_error *err) 
   return MGS_OK;
 }
 
+const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k) {
+  return k < t->n_terms ? t->terms[k]->ops->name : NULL;
+}
+
 size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out) {
   size_t n = t->n_terms < n_out ? t->n_terms : n_out;
   if (n) memcpy(out, t->term_values, n * sizeof *out);
@@ -141,7 +145,35 @@ int mgs_trainer_model_iteration(const mgs_trainer *t) {
 int mgs_trainer_active_sh(const mgs_trainer *t) { return t->active_sh; }
 const mgs_gaussians *mgs_trainer_model(const mgs_trainer *t) { return t->g; }
 mgs_gaussians *mgs_trainer_model_mut(mgs_trainer *t) { return t->g; }
-mgs_adam *mgs_trainer_adam_mut(mgs_trainer *t) { return t->adam; }
+size_t mgs_trainer_state_floats(const mgs_trainer *t) {
+  (void)t;
+  size_t n = 0;
+  for (int k = 0; k < MGS_PARAM_COUNT; k++) n += (size_t)mgs_param_dim((mgs_param_group)k);
+  return 3 * n;
+}
+
+/* pass 0: parameters, 1: first moments, 2: second moments */
+static float *state_group(const mgs_trainer *t, int pass, int k) {
+  return pass == 0 ? mgs_gaussians_group(t->g, (mgs_param_group)k) : pass == 1 ? t->adam->m[k] : t->adam->v[k];
+}
+
+void mgs_trainer_get_state(const mgs_trainer *t, size_t i, float *row) {
+  for (int pass = 0; pass < 3; pass++)
+    for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+      size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+      memcpy(row, state_group(t, pass, k) + i * d, d * sizeof(float));
+      row += d;
+    }
+}
+
+void mgs_trainer_set_state(mgs_trainer *t, size_t i, const float *row) {
+  for (int pass = 0; pass < 3; pass++)
+    for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+      size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
+      memcpy(state_group(t, pass, k) + i * d, row, d * sizeof(float));
+      row += d;
+    }
+}
 double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
 double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
 double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group) { return t->adam->lr[group]; }
@@ -208,7 +240,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   mgs_status st = mgs_trainer_scale_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();
-  t->phase_s[0] += t1 - t0;
+  t->phase_s[MGS_PHASE_FORWARD] += t1 - t0;
   size_t np = (size_t)ro.width * (size_t)ro.height * 3;
   if ((st = grow_floats(&t->dl, &t->dl_cap, np, err))) return st;
   memset(t->dl, 0, np * sizeof(float));
@@ -258,7 +290,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     ss.grad = t->grad;
   }
   double t2 = mgs_now();
-  t->phase_s[1] += t2 - t1;
+  t->phase_s[MGS_PHASE_LOSS] += t2 - t1;
   if (term_hooks & MGS_TERM_IMAGE) {
     for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
       mgs_term *tm = t->terms[k];
@@ -269,7 +301,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     }
     if (st) return st;
     double t2b = mgs_now();
-    t->phase_s[5] += t2b - t2;
+    t->phase_s[MGS_PHASE_TERMS] += t2b - t2;
     t2 = t2b;
   }
   if (!step_opt && !use_strategy) { /* nothing reads a gradient in this iteration */
@@ -284,7 +316,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
   double t3 = mgs_now();
-  t->phase_s[2] += t3 - t2;
+  t->phase_s[MGS_PHASE_BACKWARD] += t3 - t2;
   if (term_hooks & MGS_TERM_MODEL) {
     ts.grad = t->grad;
     for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
@@ -296,13 +328,13 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     }
     if (st) return st;
     double t3b = mgs_now();
-    t->phase_s[5] += t3b - t3;
+    t->phase_s[MGS_PHASE_TERMS] += t3b - t3;
     t3 = t3b;
   }
   if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
     return st;
   double t4 = mgs_now();
-  t->phase_s[3] += t4 - t3;
+  t->phase_s[MGS_PHASE_STRATEGY] += t4 - t3;
   unsigned mask = all & ~ss.replaced_groups;
   if (step_opt && !fused && mask && t->g->n == t->grad->n) {
     int whole = mask == all;
@@ -318,7 +350,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   mgs_trainer_scale_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
   t->iteration = it;
   double t5 = mgs_now();
-  t->phase_s[4] += t5 - t4;
+  t->phase_s[MGS_PHASE_ADAM] += t5 - t4;
   t->seconds += t5 - t0;
   return MGS_OK;
 }

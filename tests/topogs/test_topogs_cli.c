@@ -63,7 +63,7 @@ static void test_preset_end_to_end(void) {
   CHECK_MSG(rc == 0, "train failed: %s", out);
   CHECK_MSG(strstr(out, "LPVI (corrected): 400 points in"), "no LPVI report: %s", out);
   char *cfg = slurp("tg_run/cfg_args");
-  CHECK(cfg && strstr(cfg, "init='lpvi'") && strstr(cfg, "topogs_preset=True") && strstr(cfg, "pers_loss=10") &&
+  CHECK(cfg && strstr(cfg, "init='lpvi'") && strstr(cfg, "preset='topology-gs'") && strstr(cfg, "pers_loss=10") &&
         strstr(cfg, "pers_loss_form='topk'") && strstr(cfg, "lpvi_faithful=False"));
   char *stats = slurp("tg_run/train_stats.json");
   CHECK(stats && strstr(stats, "\"iterations\""));

@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "apps/train_mpi.h"
+#include "dist/dist_internal.h"
 #include "core/mgs_core.h"
 #include "vdb/mgs_vdb.h"
 

@@ -24,7 +24,7 @@
 #include <time.h>
 #include <stdlib.h>
 #include <string.h>
-#include "apps/train_mpi.h"
+#include "dist/dist_internal.h"
 #include "core/mgs_core.h"
 #include "train/mgs_train.h"
 
@@ -400,8 +400,7 @@ static mgs_status handoff(mgs_mpi_ghosts *gh, mgs_trainer *t, mgs_error *err) {
    again. Every rank takes part (collectives over all ranks, bounded in time). */
 static mgs_status migrate(mgs_mpi_ghosts *gh, mgs_trainer *t, int iteration, mgs_error *err) {
   mgs_gaussians *g = mgs_trainer_model_mut(t);
-  mgs_adam *ad = mgs_trainer_adam_mut(t);
-  const int size = gh->size, row = 3 * gh->dims;
+  const int size = gh->size, row = (int)mgs_trainer_state_floats(t);
   const size_t n_own = gh->n_own;
   int *dest = malloc((n_own ? n_own : 1) * sizeof(int));
   int *sendn = calloc((size_t)size, sizeof(int)), *recvn = calloc((size_t)size, sizeof(int));
@@ -429,14 +428,7 @@ static mgs_status migrate(mgs_mpi_ghosts *gh, mgs_trainer *t, int iteration, mgs
     if (!sendn[q]) continue;
     for (size_t i = 0; i < n_own; i++) {
       if (dest[i] != q) continue;
-      float *o = sb + at * (size_t)row;
-      for (int pass = 0; pass < 3; pass++)
-        for (int k = 0; k < MGS_PARAM_COUNT; k++) {
-          size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
-          const float *src = pass == 0 ? mgs_gaussians_group(g, (mgs_param_group)k) : pass == 1 ? ad->m[k] : ad->v[k];
-          memcpy(o, src + i * d, d * sizeof(float));
-          o += d;
-        }
+      mgs_trainer_get_state(t, i, sb + at * (size_t)row);
       at++;
     }
   }
@@ -447,18 +439,7 @@ static mgs_status migrate(mgs_mpi_ghosts *gh, mgs_trainer *t, int iteration, mgs
   size_t first = 0;
   mgs_status st = mgs_trainer_edit_model(t, keep, in, &first, err);
   if (!st) {
-    g = mgs_trainer_model_mut(t);
-    ad = mgs_trainer_adam_mut(t);
-    for (size_t j = 0; j < in; j++) {
-      const float *o = rb + j * (size_t)row;
-      for (int pass = 0; pass < 3; pass++)
-        for (int k = 0; k < MGS_PARAM_COUNT; k++) {
-          size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
-          float *dst = pass == 0 ? mgs_gaussians_group(g, (mgs_param_group)k) : pass == 1 ? ad->m[k] : ad->v[k];
-          memcpy(dst + (first + j) * d, o, d * sizeof(float));
-          o += d;
-        }
-    }
+    for (size_t j = 0; j < in; j++) mgs_trainer_set_state(t, first + j, rb + j * (size_t)row);
     gh->migrated_out += out;
     gh->migrated_in += in;
   }

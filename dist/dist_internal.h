@@ -1,7 +1,7 @@
-/* Internals of `morsegs train --mpi` shared by its files (apps/cmd_train_mpi.c,
- * apps/train_mpi_vdb.c). Only compiled with MPI. */
-#ifndef MGS_APPS_TRAIN_MPI_H
-#define MGS_APPS_TRAIN_MPI_H
+/* Internals of the distributed trainer shared by its files (dist/train_blocks.c,
+ * dist/merged_vdb.c, dist/ghosts.c). Only compiled with MPI. */
+#ifndef MGS_DIST_INTERNAL_H
+#define MGS_DIST_INTERNAL_H
 #ifdef MGS_HAVE_MPI
 #include <mpi.h>
 #include "core/mgs_gaussians.h"

@@ -229,7 +229,7 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   t->seconds = h.seconds; t->ema_loss = h.ema_loss; t->ema_psnr = h.ema_psnr;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) t->adam->t[k] = h.adam_t[k];
   free(data);
-  mgs_trainer_scale_invalidate(t); /* the tiles bound the old model */
+  mgs_trainer_large_invalidate(t); /* the tiles bound the old model */
   st = mgs_gaussians_check_finite(t->g, err);
   return st;
 #undef FAIL

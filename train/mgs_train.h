@@ -143,7 +143,7 @@ typedef struct mgs_train_options {
   int freeze;                /* 1: never update parameters (calibration of tests) */
   int progress;              /* 1: draw the progress bar */
   mgs_adc_options adc;
-  /* large scenes (train/trainer_scale.c); all off by default */
+  /* large scenes (train/trainer_large_scenes.c); all off by default */
   int visibility;            /* 1: project only the spatial tiles a view can see (same images);
                                 -1 auto: on when views see under half the initial model */
   double vis_tile;           /* tile side in world units, 0 = automatic */

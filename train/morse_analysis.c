@@ -505,30 +505,13 @@ mgs_status mgs_morse_ctx_flush_csv(mgs_morse_ctx *c, mgs_error *err) {
 #define CTX_MAGIC_V1 0x4d4f5253u /* "MORS" */
 
 /* The last SDF grid goes into checkpoints too: terms that read it between analyses (the
- * normal loss's ∇d) must see the same grid after --resume. OpenVDB serializes to files, so
- * it passes through a temporary .vdb (u64 size + bytes; size 0 = no grid). */
-static char *tmp_vdb_path(void) {
-  const char *dir = getenv("TMPDIR");
-  char *p = malloc(4096);
-  if (!p) return NULL;
-  snprintf(p, 4096, "%s/mgs_morse_XXXXXX", dir && *dir ? dir : "/tmp");
-  int fd = mkstemp(p);
-  if (fd < 0) { free(p); return NULL; }
-  close(fd);
-  return p;
-}
-
+ * normal loss's ∇d) must see the same grid after --resume (u64 size + bytes; 0 = no grid). */
 static mgs_status save_sdf(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   uint64_t size = 0;
   if (!c->sdf) return fwrite(&size, 8, 1, f) == 1 ? MGS_OK : mgs_error_set(err, MGS_ERR_IO, "morse: cannot write the checkpoint");
-  char *path = tmp_vdb_path(), *bytes = NULL;
-  if (!path) return mgs_error_set(err, MGS_ERR_IO, "morse: cannot create a temporary file for the SDF grid");
+  char *bytes = NULL;
   size_t len = 0;
-  const mgs_vdb_grid *gr[1] = {c->sdf};
-  mgs_status st = mgs_vdb_write(path, gr, 1, NULL, 0, NULL, err);
-  if (st == MGS_OK) st = mgs_read_file(path, &bytes, &len, err);
-  remove(path);
-  free(path);
+  mgs_status st = mgs_vdb_grid_to_bytes(c->sdf, &bytes, &len, err);
   if (st) return st;
   size = len;
   int ok = fwrite(&size, 8, 1, f) == 1 && fwrite(bytes, 1, len, f) == len;
@@ -541,16 +524,11 @@ static mgs_status load_sdf(mgs_morse_ctx *c, FILE *f, mgs_error *err) {
   if (fread(&size, 8, 1, f) != 1 || size > ((uint64_t)1 << 40))
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the Morse analysis state (SDF grid)");
   if (size == 0) return MGS_OK;
-  char *bytes = malloc(size), *path = NULL;
+  char *bytes = malloc(size);
   if (!bytes) return mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory (SDF grid)");
-  mgs_status st = MGS_OK;
-  if (fread(bytes, 1, size, f) != size) st = mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the Morse SDF grid");
-  if (st == MGS_OK && !(path = tmp_vdb_path())) st = mgs_error_set(err, MGS_ERR_IO, "morse: cannot create a temporary file for the SDF grid");
-  if (st == MGS_OK) st = mgs_write_file_atomic(path, bytes, size, err);
+  mgs_status st = fread(bytes, 1, size, f) == size ? mgs_vdb_grid_from_bytes(bytes, size, "sdf", &c->sdf, err)
+                                                   : mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the Morse SDF grid");
   free(bytes);
-  if (st == MGS_OK) st = mgs_vdb_read_grid(path, "sdf", &c->sdf, err);
-  if (path) remove(path);
-  free(path);
   return st;
 }
 mgs_status mgs_morse_ctx_save(const mgs_morse_ctx *c, FILE *f, mgs_error *err) {

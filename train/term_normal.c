@@ -249,33 +249,15 @@ static mgs_status normal_model_grad(void *self, mgs_term_step *s, mgs_error *err
   return mgs_normal_loss(g, t->T, t->o.sharpness, t->o.gamma, s->grad, &s->value, NULL, err);
 }
 
-/* A unique temporary name (mkstemp's file; the caller removes it and `name`.vdb). */
-static int temp_name(char *buf, size_t cap) {
-  const char *dir = getenv("TMPDIR");
-  snprintf(buf, cap, "%s/mgs_normal_XXXXXX", dir && *dir ? dir : "/tmp");
-  int fd = mkstemp(buf);
-  if (fd < 0) return -1;
-  close(fd);
-  return 0;
-}
-
-/* State: the grid's iteration, builds, and the grid itself as .vdb bytes (vdb/ writes
- * files only: through a temporary file). */
+/* State: the grid's iteration, builds, the grid itself as bytes and the tensor cache. */
 static mgs_status normal_save(void *self, FILE *f, mgs_error *err) {
   mgs_normal_term *t = self;
   int32_t hdr[3] = {t->sdf_iter, t->builds, t->sdf != NULL};
   if (fwrite(hdr, sizeof hdr, 1, f) != 1) return mgs_error_set(err, MGS_ERR_IO, "normal loss: checkpoint write failed");
   if (!t->sdf) return MGS_OK;
-  char tmp[512], path[520];
-  if (temp_name(tmp, sizeof tmp)) return mgs_error_set(err, MGS_ERR_IO, "normal loss: cannot create a temporary file for the checkpoint");
-  snprintf(path, sizeof path, "%s.vdb", tmp);
-  const mgs_vdb_grid *grids[1] = {t->sdf};
   char *data = NULL;
   size_t size = 0;
-  mgs_status st = mgs_vdb_write(path, grids, 1, NULL, 0, NULL, err);
-  if (st == MGS_OK) st = mgs_read_file(path, &data, &size, err);
-  remove(path);
-  remove(tmp);
+  mgs_status st = mgs_vdb_grid_to_bytes(t->sdf, &data, &size, err);
   if (st) return st;
   uint64_t n = size, cn = t->cached_n;
   if (fwrite(&n, sizeof n, 1, f) != 1 || fwrite(data, 1, size, f) != size) st = mgs_error_set(err, MGS_ERR_IO, "normal loss: checkpoint write failed");
@@ -303,14 +285,8 @@ static mgs_status normal_load(void *self, FILE *f, mgs_error *err) {
   char *data = malloc(n ? n : 1);
   if (!data) return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory reading the checkpoint");
   if (fread(data, 1, n, f) != n) { free(data); return mgs_error_set(err, MGS_ERR_FORMAT, "normal loss: truncated checkpoint state"); }
-  char tmp[512], path[520];
-  if (temp_name(tmp, sizeof tmp)) { free(data); return mgs_error_set(err, MGS_ERR_IO, "normal loss: cannot create a temporary file"); }
-  snprintf(path, sizeof path, "%s.vdb", tmp);
-  mgs_status st = mgs_write_file_atomic(path, data, n, err);
+  mgs_status st = mgs_vdb_grid_from_bytes(data, n, NULL, &t->sdf, err);
   free(data);
-  if (st == MGS_OK) st = mgs_vdb_read_grid(path, NULL, &t->sdf, err);
-  remove(path);
-  remove(tmp);
   if (st) return st;
   uint64_t cn;
   if (fread(&cn, sizeof cn, 1, f) != 1 || cn > ((uint64_t)1 << 34))

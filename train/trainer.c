@@ -47,7 +47,7 @@ static void shuffle(mgs_trainer *t) {
     uint32_t x = t->perm[i - 1]; t->perm[i - 1] = t->perm[j]; t->perm[j] = x;
   }
   t->perm_pos = 0;
-  mgs_trainer_scale_order_views(t); /* --view-order locality (train/trainer_scale.c) */
+  mgs_trainer_large_order_views(t); /* --view-order locality (train/trainer_large_scenes.c) */
 }
 
 mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_gaussians *init,
@@ -76,7 +76,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
     mgs_trainer_destroy(t);
     return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
   }
-  if ((st = mgs_trainer_scale_init(t, err))) { mgs_trainer_destroy(t); return st; }
+  if ((st = mgs_trainer_large_init(t, err))) { mgs_trainer_destroy(t); return st; }
   double ext = ds->extent > 0 ? ds->extent : 1.0;
   t->adam->lr[MGS_PARAM_MEAN] = (float)(o->lr_mean_init * ext);
   t->adam->lr[MGS_PARAM_LOG_SCALE] = o->lr_log_scale;
@@ -88,7 +88,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   memcpy(t->rs.background, ds->background, sizeof t->rs.background);
   mgs_rng_init(&t->rng, o->seed, 0x7261696eu);
   shuffle(t);
-  /* with an image cache (train/trainer_scale.c) images are decoded on demand instead */
+  /* with an image cache (train/trainer_large_scenes.c) images are decoded on demand instead */
   for (size_t i = 0; i < t->perm_len && st == MGS_OK && !o->image_cache_mb; i++) {
     mgs_view *v = &ds->views[MGS_SPLIT_TRAIN][i];
     if (!v->image) st = mgs_dataset_load_image(ds, v, err);
@@ -110,7 +110,7 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
   free(t->terms); free(t->term_values);
   mgs_raster_destroy(t->raster);
-  mgs_trainer_scale_destroy(t);
+  mgs_trainer_large_destroy(t);
   mgs_progress_destroy(t->progress);
   free(t->perm); free(t->dl); free(t->gm2d);
   free(t);
@@ -237,7 +237,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
   t->raster_n = t->g->n;
-  mgs_status st = mgs_trainer_scale_forward(t, &v->cam, &ro, err);
+  mgs_status st = mgs_trainer_large_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();
   t->phase_s[MGS_PHASE_FORWARD] += t1 - t0;
@@ -246,7 +246,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   memset(t->dl, 0, np * sizeof(float));
   const float lam = o->lambda_dssim;
   const float *gt = NULL;
-  if ((st = mgs_trainer_scale_image(t, view_index, &gt, err))) return st;
+  if ((st = mgs_trainer_large_image(t, view_index, &gt, err))) return st;
   double l1 = mgs_loss_l1(ro.color, gt, ro.width, ro.height, 3, 1.0f - lam, t->dl);
   double ssim = mgs_ssim(ro.color, gt, ro.width, ro.height, 3, -lam, t->dl);
   double loss = (1.0 - lam) * l1 + lam * (1.0 - ssim);
@@ -311,7 +311,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if (fused) st = mgs_trainer_scale_adam_fused(t, ro.radii, all, err);
+  if (fused) st = mgs_trainer_large_adam_fused(t, ro.radii, all, err);
   else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
@@ -338,7 +338,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   unsigned mask = all & ~ss.replaced_groups;
   if (step_opt && !fused && mask && t->g->n == t->grad->n) {
     int whole = mask == all;
-    st = mgs_trainer_scale_adam(t, ro.radii, mask, whole, err);
+    st = mgs_trainer_large_adam(t, ro.radii, mask, whole, err);
     if (st == MGS_OK && whole) {
       t->grad_clean = 1;
       t->grad_clean_n = t->g->n;
@@ -347,7 +347,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
     if (st) return st;
   }
-  mgs_trainer_scale_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
+  mgs_trainer_large_after_step(t, &ss, ro.radii, step_opt && (fused || mask));
   t->iteration = it;
   double t5 = mgs_now();
   t->phase_s[MGS_PHASE_ADAM] += t5 - t4;
@@ -439,6 +439,6 @@ mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t ad
   }
   if (first) *first = f;
   t->grad_clean = 0; /* the gradient rows no longer match the model's */
-  mgs_trainer_scale_invalidate(t);
+  mgs_trainer_large_invalidate(t);
   return MGS_OK;
 }

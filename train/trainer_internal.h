@@ -35,7 +35,7 @@ struct mgs_trainer {
   double last_loss;
   double phase_s[MGS_TRAIN_PHASES]; /* seconds per phase, see mgs_trainer_phase_seconds */
   struct mgs_progress *progress; /* drawn across run_until calls */
-  /* large scenes (train/trainer_scale.c) */
+  /* large scenes (train/trainer_large_scenes.c) */
   struct mgs_visibility *vis;   /* NULL unless o.visibility */
   size_t raster_n;              /* model count at this iteration's forward */
   size_t vis_listed;            /* Gaussians projected, summed over iterations */
@@ -46,18 +46,18 @@ struct mgs_trainer {
   uint32_t *view_scratch;
 };
 
-/* train/trainer_scale.c: the large-scene paths (visibility, sparse Adam) */
-mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err);
-void mgs_trainer_scale_destroy(mgs_trainer *t);
-void mgs_trainer_scale_invalidate(mgs_trainer *t); /* the model was replaced (checkpoint) */
-mgs_status mgs_trainer_scale_forward(mgs_trainer *t, const mgs_camera *cam, mgs_raster_output *ro, mgs_error *err);
-mgs_status mgs_trainer_scale_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err);
-mgs_status mgs_trainer_scale_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err);
+/* train/trainer_large_scenes.c: the large-scene paths (visibility, sparse Adam) */
+mgs_status mgs_trainer_large_init(mgs_trainer *t, mgs_error *err);
+void mgs_trainer_large_destroy(mgs_trainer *t);
+void mgs_trainer_large_invalidate(mgs_trainer *t); /* the model was replaced (checkpoint) */
+mgs_status mgs_trainer_large_forward(mgs_trainer *t, const mgs_camera *cam, mgs_raster_output *ro, mgs_error *err);
+mgs_status mgs_trainer_large_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err);
+mgs_status mgs_trainer_large_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err);
 /* The ground truth of train view i: the dataset's float image, or the cache's (then the
  * next views are handed to its prefetch thread). */
-mgs_status mgs_trainer_scale_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err);
+mgs_status mgs_trainer_large_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err);
 /* After each epoch's shuffle: views of one spatial chunk made consecutive (no-op unless
  * o.view_locality). */
-void mgs_trainer_scale_order_views(mgs_trainer *t);
-void mgs_trainer_scale_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped);
+void mgs_trainer_large_order_views(mgs_trainer *t);
+void mgs_trainer_large_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped);
 #endif

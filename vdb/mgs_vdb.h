@@ -302,6 +302,11 @@ mgs_status mgs_vdb_write(const char *path, const mgs_vdb_grid *const *grids, siz
  * a hostile file is an error, never a crash or an unbounded allocation. */
 mgs_status mgs_vdb_read_grid(const char *path, const char *name, mgs_vdb_grid **out,
                              mgs_error *err);
+/* A grid as bytes (OpenVDB's stream format; free() them) and back (name NULL: the first
+ * float grid; bytes of a whole .vdb file are read too): for checkpoints (vdb/grid_bytes.cpp). */
+mgs_status mgs_vdb_grid_to_bytes(const mgs_vdb_grid *g, char **bytes, size_t *len, mgs_error *err);
+mgs_status mgs_vdb_grid_from_bytes(const char *bytes, size_t len, const char *name, mgs_vdb_grid **out,
+                                   mgs_error *err);
 /* File metadata written by mgs_vdb_write (fields left default when absent). */
 mgs_status mgs_vdb_read_meta(const char *path, mgs_vdb_file_meta *meta, mgs_error *err);
 

@@ -19,7 +19,7 @@ static mgs_status cache_init(mgs_trainer *t, mgs_error *err) {
   return mgs_image_cache_create(t->ds, MGS_SPLIT_TRAIN, t->o.image_cache_mb << 20, t->o.prefetch > 0, &t->cache, err);
 }
 
-mgs_status mgs_trainer_scale_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err) {
+mgs_status mgs_trainer_large_image(mgs_trainer *t, size_t i, const float **gt, mgs_error *err) {
   mgs_view *v = &t->ds->views[MGS_SPLIT_TRAIN][i];
   if (!t->cache) { *gt = v->image->data; return MGS_OK; }
   size_t need = (size_t)v->cam.width * (size_t)v->cam.height * 3;
@@ -122,11 +122,11 @@ static mgs_status views_init(mgs_trainer *t, mgs_error *err) {
   return st;
 }
 
-void mgs_trainer_scale_order_views(mgs_trainer *t) {
+void mgs_trainer_large_order_views(mgs_trainer *t) {
   if (t->view_chunk) mgs_partition_order_by_chunks(t->view_chunk, t->perm_len, t->perm, t->view_scratch);
 }
 
-mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err) {
+mgs_status mgs_trainer_large_init(mgs_trainer *t, mgs_error *err) {
   mgs_status st = cache_init(t, err);
   if (st == MGS_OK) st = views_init(t, err);
   if (st == MGS_OK) st = resolve_auto(t, err);
@@ -148,7 +148,7 @@ mgs_status mgs_trainer_scale_init(mgs_trainer *t, mgs_error *err) {
   return MGS_OK;
 }
 
-void mgs_trainer_scale_destroy(mgs_trainer *t) {
+void mgs_trainer_large_destroy(mgs_trainer *t) {
   mgs_visibility_destroy(t->vis);
   t->vis = NULL;
   mgs_image_cache_destroy(t->cache);
@@ -160,11 +160,11 @@ void mgs_trainer_scale_destroy(mgs_trainer *t) {
   t->view_chunk = t->view_scratch = NULL;
 }
 
-void mgs_trainer_scale_invalidate(mgs_trainer *t) {
+void mgs_trainer_large_invalidate(mgs_trainer *t) {
   if (t->vis) mgs_visibility_invalidate(t->vis);
 }
 
-mgs_status mgs_trainer_scale_forward(mgs_trainer *t, const mgs_camera *cam, mgs_raster_output *ro, mgs_error *err) {
+mgs_status mgs_trainer_large_forward(mgs_trainer *t, const mgs_camera *cam, mgs_raster_output *ro, mgs_error *err) {
   if (!t->vis) return mgs_raster_forward(t->raster, t->g, cam, &t->rs, ro, err);
   const uint32_t *idx;
   size_t n_idx;
@@ -174,20 +174,20 @@ mgs_status mgs_trainer_scale_forward(mgs_trainer *t, const mgs_camera *cam, mgs_
   return mgs_raster_forward_list(t->raster, t->g, cam, &t->rs, idx, n_idx, ro, err);
 }
 
-mgs_status mgs_trainer_scale_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err) {
+mgs_status mgs_trainer_large_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err) {
   if (t->o.sparse_adam)
     return mgs_adam_step_backward_sparse(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, mask, radii, err);
   return mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, mask, err);
 }
 
-mgs_status mgs_trainer_scale_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err) {
+mgs_status mgs_trainer_large_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err) {
   /* after a count change radii no longer matches the model: step densely this once */
   if (t->o.sparse_adam && t->raster_n == t->g->n)
     return mgs_adam_step_sparse(t->adam, t->g, t->grad, mask, radii, zero_grad, err);
   return mgs_adam_step_zero(t->adam, t->g, t->grad, mask, zero_grad, err);
 }
 
-void mgs_trainer_scale_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped) {
+void mgs_trainer_large_after_step(mgs_trainer *t, const mgs_strategy_step *ss, const int *radii, int stepped) {
   if (!t->vis) return;
   if (ss->replaced_groups || t->g->n != t->raster_n) { mgs_visibility_invalidate(t->vis); return; }
   if (t->o.vis_rebin_every > 0 && (t->iteration + 1) % t->o.vis_rebin_every == 0) {

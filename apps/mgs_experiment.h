@@ -3,7 +3,8 @@
  *   cmd_experiment.c ........ command line, plan, one child process per train/eval, resume
  *   cmd_experiment_measure.c  what each evaluation point records (eval's figures, floater
  *                             mass, Betti numbers, bottleneck distance to the GT diagram)
- *   cmd_experiment_report.c . RESULTS.md / RESULTS.json / CSV, H1–H4 verdicts
+ *   cmd_experiment_report.c . RESULTS.md / RESULTS.json / CSV, H1–H4 verdicts (statistics:
+ *                             stats/mgs_stats.h), and re-analysis of earlier results
  *   cmd_experiment_plot.c ... line plots (cairo, PNG + SVG). */
 #ifndef MGS_EXPERIMENT_H
 #define MGS_EXPERIMENT_H
@@ -87,9 +88,17 @@ typedef struct exp_report_in {
   const exp_run *runs;
   size_t planned_runs;
   double load_start;           /* 1-minute load average when the experiment started */
+  const char *source_note;     /* a line under the command (re-analysis: where the runs came from); may be NULL */
+  const char *previous_results; /* an earlier RESULTS.json whose verdicts are compared; may be NULL */
 } exp_report_in;
 
+/* The statistics are stats/mgs_stats.h's; this writes them (and the runs) out. */
 mgs_status exp_report_write(const exp_report_in *in, mgs_error *err);
+/* Re-analysis without training: FROM/curves.csv (every evaluation point of every run, as
+ * exp_report_write wrote it) and FROM/RESULTS.json (settings, variants, ground truth as
+ * recorded) -> the report in OUT, its verdicts compared with FROM's. variants: comma list
+ * of the variants kept (NULL = all; baseline is always kept). */
+mgs_status exp_report_from_results(const char *from, const char *out, const char *variants, mgs_error *err);
 
 /* ---- plots ---- */
 typedef struct exp_series {
@@ -101,14 +110,4 @@ typedef struct exp_series {
 mgs_status exp_plot_lines(const char *base, const char *title, const char *xlabel, const char *ylabel,
                           const exp_series *s, size_t ns, int logy, mgs_error *err);
 
-/* Verdict of one hypothesis: computed from per-seed changes (see cmd_experiment_report.c). */
-typedef struct exp_verdict {
-  int n;                       /* seeds compared */
-  double mean, sd, spread;     /* change (relative or dB), its sd over seeds, baseline spread */
-  const char *verdict;         /* "yes", "partly", "no", "worse", "n/a" */
-  char note[160];
-} exp_verdict;
-/* direction: -1 = lower is better (target: change <= target), +1 = higher is better. */
-void exp_verdict_compute(const double *change, int n, double spread, int direction, double target,
-                         exp_verdict *v);
 #endif

@@ -1,6 +1,6 @@
 /* morsegs experiment DATA... -o DIR: every dataset x variant x seed trained at the same
  * iterations by `morsegs train`, evaluated at several points by `morsegs eval` and the
- * topology measures of apps/cmd_experiment_measure.c, then the H1–H4 verdicts, curves and
+ * topology measures of measure/mgs_measure.h, then the H1–H4 verdicts (stats/mgs_stats.h), curves and
  * tables of apps/cmd_experiment_report.c (SPEC §7, issue 10).
  *
  * Each train and eval is a child process of this same binary (/proc/self/exe), one at a

@@ -12,6 +12,7 @@ static void t_distribution(void) {
   CHECK_NEAR(mgs_stats_t_quantile(0.975, 4), 2.77644511, 1e-7);
   CHECK_NEAR(mgs_stats_t_quantile(0.975, 9), 2.26215716, 1e-7);
   CHECK_NEAR(mgs_stats_t_quantile(0.975, 30), 2.04227246, 1e-7);
+  CHECK_NEAR(mgs_stats_t_quantile(0.975, 100), 1.98397152, 1e-7);
   CHECK_NEAR(mgs_stats_t_quantile(0.975, 1e6), 1.95996591, 1e-5); /* -> normal */
   CHECK_NEAR(mgs_stats_t_quantile(0.995, 5), 4.03214298, 1e-7);
   CHECK_NEAR(mgs_stats_t_quantile(0.025, 4), -2.77644511, 1e-7);  /* symmetric */

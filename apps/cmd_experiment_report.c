@@ -625,8 +625,10 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       char b1[32], b2[32];
       fmt_betti(b1, sizeof b1, t->betti);
       fmt_betti(b2, sizeof b2, t->betti_persistent);
-      fprintf(f, "GT mesh `%s`: SDF Betti numbers %s, persisting over %.4g: %s; voxel %.4g, band %d voxels, visible-floater "
-                 "distance %.4g.\n\n", t->mesh, b1, t->pers_threshold, b2, t->voxel, t->band, t->visible_dist);
+      char band[48] = "band not recorded"; /* a truth read back from a report (--report-from) */
+      if (t->band > 0) snprintf(band, sizeof band, "band %d voxels", t->band);
+      fprintf(f, "GT mesh `%s`: SDF Betti numbers %s, persisting over %.4g: %s; voxel %.4g, %s, visible-floater "
+                 "distance %.4g.\n\n", t->mesh, b1, t->pers_threshold, b2, t->voxel, band, t->visible_dist);
       cJSON_AddItemToObject(od, "gt_betti", cJSON_CreateIntArray(t->betti, 3));
       cJSON_AddItemToObject(od, "gt_betti_persistent", cJSON_CreateIntArray(t->betti_persistent, 3));
       cJSON_AddNumberToObject(od, "voxel", t->voxel);

@@ -52,7 +52,7 @@ typedef struct exp_truth {
   double diag, voxel, pers_threshold, visible_dist, half_width;
   int band;                    /* voxels */
   int betti[3], betti_persistent[3];
-  mgs_diagram *diagram;        /* NULL when there is no mesh */
+  mgs_diagram *diagram;        /* NULL when there is no mesh (or the truth was read back from a report) */
   void *mesh_distance;         /* mgs_mesh_distance* (floater distances) */
 } exp_truth;
 

@@ -20,7 +20,6 @@
  *     seeds outside the front's PSNR range are n/a and counted (and how many of all seeds
  *     the front dominates outright). */
 #include <cjson/cJSON.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -828,7 +827,6 @@ static mgs_status read_curves(const char *path, const char *keep, exp_run **runs
     double v[24];
     for (int q = 2; q < 24; q++) {
       char *end;
-      errno = 0;
       v[q] = strtod(f[q], &end);
       if (end == f[q] || *end) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: field %d is not a number ('%s')", path, line_no, q + 1, f[q]); break; }
     }

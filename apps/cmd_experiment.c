@@ -1,6 +1,6 @@
 /* morsegs experiment DATA... -o DIR: every dataset x variant x seed trained at the same
  * iterations by `morsegs train`, evaluated at several points by `morsegs eval` and the
- * topology measures of apps/cmd_experiment_measure.c, then the H1–H4 verdicts, curves and
+ * topology measures of measure/mgs_measure.h, then the H1–H4 verdicts (stats/mgs_stats.h), curves and
  * tables of apps/cmd_experiment_report.c (SPEC §7, issue 10).
  *
  * Each train and eval is a child process of this same binary (/proc/self/exe), one at a
@@ -49,16 +49,21 @@ typedef struct variant_def {
   int sweep_by_default;     /* one of the densification strategies (ADC, Morse) */
 } variant_def;
 
+/* The H3 knob of each family is the one that changes its spawning: ADC's gradient threshold;
+ * MorseGS-D's gaps rule spawns at dimension-1/2 pairs of radius <= gap_max (train/
+ * strategy_morse.c; tests/train/test_morse_gaps.c shows x0.5 and x2 spawn differently); the
+ * literal rules read eps_p (default 0.01, train/morse_analysis.c). morse-i has no literal
+ * form that differs (`--literal` changes spawn, prune and L_topo, none of which morse-i
+ * uses), so there is no morse-i-literal row. */
 static const variant_def VARIANTS[] = {
   {"baseline", {NULL}, "--grad-threshold", 2e-4, 1},
-  {"morse-d", {"--preset", "morse-d", NULL}, "--eps-p", 0.02, 1},
+  {"morse-d", {"--preset", "morse-d", NULL}, "--gap-max", 0.05, 1},
   {"morse-r", {"--preset", "morse-r", NULL}, "--grad-threshold", 2e-4, 0},
   {"morse-i", {"--preset", "morse-i", NULL}, "--grad-threshold", 2e-4, 0},
-  {"morse-full", {"--preset", "morse-full", NULL}, "--eps-p", 0.02, 1},
-  {"morse-d-literal", {"--preset", "morse-d", "--literal", NULL}, "--eps-p", 0.02, 0},
+  {"morse-full", {"--preset", "morse-full", NULL}, "--gap-max", 0.05, 1},
+  {"morse-d-literal", {"--preset", "morse-d", "--literal", NULL}, "--eps-p", 0.01, 0},
   {"morse-r-literal", {"--preset", "morse-r", "--literal", NULL}, "--grad-threshold", 2e-4, 0},
-  {"morse-i-literal", {"--preset", "morse-i", "--literal", NULL}, "--grad-threshold", 2e-4, 0},
-  {"morse-full-literal", {"--preset", "morse-full", "--literal", NULL}, "--eps-p", 0.02, 0},
+  {"morse-full-literal", {"--preset", "morse-full", "--literal", NULL}, "--eps-p", 0.01, 0},
   {"topology-gs", {"--preset", "topology-gs", NULL}, "--grad-threshold", 2e-4, 0},
 };
 #define N_VARIANTS (sizeof VARIANTS / sizeof VARIANTS[0])
@@ -84,16 +89,18 @@ static void usage(FILE *f) {
     "      --evals N          evaluation points, evenly spaced, the last at --iters (4)\n"
     "      --eval-at LIST     evaluation iterations instead (the final one is always added)\n"
     "      --mesh GT          ground-truth mesh (one DATA only; default: DATA/gt_mesh.ply)\n"
-    "      --sweep LIST       H3: multipliers of each swept variant's densification knob (0.5,2,4;\n"
+    "      --sweep LIST       H3: multipliers of each swept variant's densification knob (0.25,0.5,2,4;\n"
     "                         'none' = no sweep); the default run is the multiplier 1\n"
     "      --variant NAME=ARGS  an extra variant: NAME trained with `morsegs train ... ARGS` (ARGS split at\n"
     "                         spaces; listed in --variants when that is given)\n"
     "      --sweep-variants LIST  variants swept (default: baseline,morse-d,morse-full)\n"
-    "      --sweep-seeds N    seeds per sweep point (1)\n"
-    "      --knob V=FLAG:VAL  the knob of variant V is `FLAG` with default VAL (e.g. morse-d=--eps-p:0.02)\n"
+    "      --sweep-seeds N    seeds per sweep point (--seeds: H3's Pareto front uses every seed)\n"
+    "      --knob V=FLAG:VAL  the knob of variant V is `FLAG` with default VAL (e.g. morse-d=--gap-max:0.05)\n"
     "      --train-arg ARG    extra argument for every `morsegs train` (repeatable, e.g. --train-arg=--sh-degree=1)\n"
     "      --eval-views N     evaluate at most N test views (all)\n"
     "      --topo-res N       topology measures: SDF voxel = GT bounding-box diagonal / N (256)\n"
+    "      --report-from FROM re-analysis, no training: FROM's curves.csv and RESULTS.json -> the report in\n"
+    "                         -o DIR (verdicts compared with FROM's; no DATA; --variants keeps some)\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
 }
@@ -484,7 +491,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -493,12 +500,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"sweep-variants", required_argument, 0, O_SWEEP_VARS}, {"sweep-seeds", required_argument, 0, O_SWEEP_SEEDS},
     {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
-    {"variant", required_argument, 0, O_VARIANT}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
+    {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
-  e.iters = 30000; e.seeds = 3; e.sweep_seeds = 1; e.topo_res = EXP_TOPO_RES;
+  e.iters = 30000; e.seeds = 3; e.sweep_seeds = 0; e.topo_res = EXP_TOPO_RES; /* sweep_seeds 0: as --seeds */
   int n_evals = 4, rc = 1, lock_fd = -1;
-  const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.5,2,4", *sweep_vars = NULL;
+  const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
   strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0};
   variant_def custom_defs[16];
   char custom_buf[16][512];
@@ -520,6 +528,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_SWEEP_SEEDS: if (!parse_int(optarg, "--sweep-seeds", 1, &e.sweep_seeds) || e.sweep_seeds > 64) { fprintf(stderr, "morsegs experiment: --sweep-seeds must be 1..64\n"); return 2; } break;
       case O_KNOB: sl_push(&knobs, optarg); break;
       case O_TRAIN_ARG: sl_push(&e.train_args, optarg); break;
+      case O_REPORT_FROM: report_from = optarg; break;
       case O_EVAL_VIEWS: if (!parse_int(optarg, "--eval-views", 1, &e.eval_views)) return 2; break;
       case O_TOPO_RES: if (!parse_int(optarg, "--topo-res", 16, &e.topo_res) || e.topo_res > 4096) { fprintf(stderr, "morsegs experiment: --topo-res must be 16..4096\n"); return 2; } break;
       case 'h': case O_HELP: usage(stdout); return 0;
@@ -527,6 +536,22 @@ int mgs_cmd_experiment(int argc, char **argv) {
     }
   }
   if (!e.dir) { fprintf(stderr, "morsegs experiment: -o DIR is required\n"); usage(stderr); return 2; }
+  if (report_from) { /* re-analysis only: nothing is trained */
+    if (optind < argc) { fprintf(stderr, "morsegs experiment: --report-from takes no DATA (got '%s')\n", argv[optind]); goto usage_fail; }
+    char a[PATH_MAX], b[PATH_MAX];
+    if (realpath(report_from, a) && realpath(e.dir, b) && !strcmp(a, b)) {
+      fprintf(stderr, "morsegs experiment: --report-from %s: -o must be another folder (the earlier report is kept)\n", report_from);
+      goto usage_fail;
+    }
+    mgs_error rerr;
+    mgs_error_clear(&rerr);
+    if (exp_report_from_results(report_from, e.dir, variants, &rerr)) { mgs_cli_fail("experiment", &rerr); goto fail; }
+    printf("wrote %s/RESULTS.md, %s/RESULTS.json, %s/curves.csv, %s/h3.csv, %s/plots/ (re-analysis of %s)\n", e.dir, e.dir, e.dir,
+           e.dir, e.dir, report_from);
+    rc = 0;
+    goto fail;
+  }
+  if (!e.sweep_seeds) e.sweep_seeds = e.seeds;
   if (optind >= argc) { fprintf(stderr, "morsegs experiment: at least one DATA folder is expected\n"); usage(stderr); return 2; }
   if (mesh && argc - optind != 1) { fprintf(stderr, "morsegs experiment: --mesh applies to one DATA (with several, each dataset's gt_mesh.ply is used)\n"); return 2; }
   if (mesh && !mgs_path_exists(mesh)) { fprintf(stderr, "morsegs experiment: --mesh %s: file not found\n", mesh); return 2; }

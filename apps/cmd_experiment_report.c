@@ -1,18 +1,24 @@
 /* The report of `morsegs experiment`: DIR/RESULTS.md (readable), DIR/RESULTS.json (the same
  * figures as data), DIR/curves.csv (every evaluation point of every run), DIR/h3.csv (the
- * count–PSNR curves) and DIR/plots/<dataset>_*.{png,svg}.
+ * count–PSNR points by knob factor) and DIR/plots/<dataset>_*.{png,svg}. This file reads
+ * runs and writes; the statistics are stats/mgs_stats.h's.
  *
- * Verdicts (computed here, never typed): for each variant and hypothesis, the per-seed change
- * against the baseline run of the same seed (relative for Chamfer, floaters, Gaussian counts;
- * dB for PSNR); mean and sd over seeds. The seed-to-seed spread is the baseline's own sd over
- * seeds in the same units (relative: divided by its mean). With noise = max(spread, sd of the
- * change), a change is significant when |mean| > 2 noise. Then "yes" = significant, in the
- * hypothesis' direction and at least the seed's target (H1 -30 %, H2 -90 %, H3 -40 %, H4
- * +0.5 dB, SSIM +0.01); "partly" = significant in the right direction, short of the target; "worse" =
- * significant in the wrong direction; "no" = not significant; "n/a" = fewer than 2 seeds
- * or no measurement. H3 compares at equal PSNR: the variant's count against the baseline's
- * count–PSNR curve (the knob sweep, log-count interpolated linearly in PSNR) at the
- * variant's PSNR, per seed. */
+ * Verdicts (computed here, never typed), per dataset × variant × measure ("cell"):
+ *   - the per-seed change against the base run of the same seed on a log scale: log-ratio
+ *     for Chamfer, floaters (the count with +1, so a zero count stays finite) and floater
+ *     mass; the difference in dB for PSNR and in SSIM;
+ *   - its 95 % t-interval over seeds (n−1 dof) and the paired t-test's p; the word from the
+ *     interval: yes = wholly beyond the target (H1 −30 %, H2 −90 %, H3 −40 %, H4 +0.5 dB,
+ *     SSIM +0.01), partly = beyond 0 in the right direction, worse = beyond 0 in the wrong
+ *     one, no = contains 0, n/a = fewer than 2 seeds with a measurement (reason given);
+ *   - Holm's correction within each hypothesis' family (H1; H2 count and visible mass; H3;
+ *     H4 PSNR and SSIM) over every dataset and variant: the Holm word is "no" unless Holm
+ *     rejects the cell, else the word of the interval at the level Holm tested it at
+ *     (stats/paired.c). Both words are printed, with the interval and the adjusted p.
+ *   - H3 compares at equal PSNR against the Pareto front of the base method's sweep (every
+ *     knob factor, every seed): each seed's log(count / the front's count at its PSNR);
+ *     seeds outside the front's PSNR range are n/a and counted (and how many of all seeds
+ *     the front dominates outright). */
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -21,47 +27,52 @@
 #include <time.h>
 #include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
+#include "stats/mgs_stats.h"
+
+#define EXP_LEVEL 0.95      /* interval level and Holm's α = 1 − this */
+#define EXP_BOOT 4000       /* bootstrap resamples (JSON only) */
+#define EXP_BASE "baseline" /* every variant sits on 3DGS so far */
+
+typedef enum measure { M_CHAMFER, M_FLOATERS, M_FLOATER_MASS, M_GAUSSIANS, M_PSNR, M_SSIM } measure;
 
 typedef struct hyp_def {
-  const char *key, *title, *unit;
-  int direction;      /* -1 lower is better */
-  double target;
-  int relative;
-  const char *fmt, *fmt_sd; /* change (x100 when relative) and its sd */
+  const char *key, *family, *title;
+  measure what;
+  int direction;          /* −1 lower is better */
+  double target;          /* as printed: % for log-ratios, else the measure's unit */
+  mgs_stats_scale scale;
+  double offset;          /* added to both sides before the log-ratio (counts that can be 0) */
+  int front;              /* H3: against the base's Pareto front, not the paired base run */
+  const char *unit;
 } hyp_def;
 
-/* Order matters: metric() below reads the measure by index. */
 static const hyp_def HYPS[] = {
-  {"H1", "H1 Chamfer", "%", -1, -0.30, 1, "%+.1f", "%.1f"},
-  {"H2", "H2 floaters (seed's count)", "%", -1, -0.90, 1, "%+.1f", "%.1f"},
-  {"H2_visible", "H2 floaters (visible mass)", "%", -1, -0.90, 1, "%+.1f", "%.1f"},
-  {"H3", "H3 Gaussians at equal PSNR", "%", -1, -0.40, 1, "%+.1f", "%.1f"},
-  {"H4", "H4 PSNR", "dB", +1, 0.5, 0, "%+.2f", "%.2f"},
-  {"H4_ssim", "H4 SSIM", "", +1, 0.01, 0, "%+.4f", "%.4f"},
+  {"H1", "H1", "H1 Chamfer", M_CHAMFER, -1, -30, MGS_STATS_LOG_RATIO, 0, 0, "%"},
+  {"H2", "H2", "H2 floaters (seed's count)", M_FLOATERS, -1, -90, MGS_STATS_LOG_RATIO, 1, 0, "%"},
+  {"H2_visible", "H2", "H2 floaters (visible mass)", M_FLOATER_MASS, -1, -90, MGS_STATS_LOG_RATIO, 0, 0, "%"},
+  {"H3", "H3", "H3 Gaussians at equal PSNR (Pareto front)", M_GAUSSIANS, -1, -40, MGS_STATS_LOG_RATIO, 0, 1, "%"},
+  {"H4", "H4", "H4 PSNR", M_PSNR, +1, 0.5, MGS_STATS_DIFFERENCE, 0, 0, "dB"},
+  {"H4_ssim", "H4", "H4 SSIM", M_SSIM, +1, 0.01, MGS_STATS_DIFFERENCE, 0, 0, ""},
 };
 #define N_HYPS (sizeof HYPS / sizeof HYPS[0])
 
-void exp_verdict_compute(const double *change, int n, double spread, int direction, double target, exp_verdict *v) {
-  memset(v, 0, sizeof *v);
-  v->n = n;
-  v->spread = spread;
-  v->mean = v->sd = NAN;
-  v->verdict = "n/a";
-  if (n < 1) { snprintf(v->note, sizeof v->note, "no paired measurement"); return; }
-  double m = 0;
-  for (int i = 0; i < n; i++) m += change[i];
-  m /= n;
-  double s = 0;
-  for (int i = 0; i < n; i++) s += (change[i] - m) * (change[i] - m);
-  v->mean = m;
-  v->sd = n > 1 ? sqrt(s / (n - 1)) : NAN;
-  if (n < 2 || !isfinite(spread)) { snprintf(v->note, sizeof v->note, "needs 2 seeds"); return; }
-  const double noise = fmax(spread, v->sd);
-  const int significant = fabs(m) > 2 * noise;
-  const int right = direction * m > 0;
-  const int reached = direction < 0 ? m <= target : m >= target;
-  v->verdict = !significant ? "no" : !right ? "worse" : reached ? "yes" : "partly";
-}
+/* The target on the analysis scale. */
+static double analysis_target(const hyp_def *h) { return h->scale == MGS_STATS_LOG_RATIO ? log1p(h->target / 100) : h->target; }
+/* A value on the analysis scale as printed: % for log-ratios. */
+static double shown(const hyp_def *h, double x) { return h->scale == MGS_STATS_LOG_RATIO ? 100 * expm1(x) : x; }
+
+/* One cell: a variant's measure on a dataset against its base. */
+typedef struct exp_cell {
+  int computed;
+  mgs_stats_interval iv;
+  mgs_stats_verdict verdict, verdict_holm;
+  double p_holm, holm_level, holm_lo, holm_hi;
+  int unpaired;                  /* seeds with a run on one side only */
+  mgs_stats_front_tally tally;   /* H3 */
+  size_t front_n;                /* H3: points on the base's front */
+  double base_mean, base_sd;     /* the base's measure over seeds (reference) */
+  char note[240];
+} exp_cell;
 
 static double mean_of(const double *x, int n) { double s = 0; for (int i = 0; i < n; i++) s += x[i]; return n ? s / n : NAN; }
 static double sd_of(const double *x, int n) {
@@ -73,15 +84,15 @@ static double sd_of(const double *x, int n) {
 
 static const exp_point *final_pt(const exp_run *r) { return r->n_points ? &r->pt[r->n_points - 1] : NULL; }
 
-static double metric(const exp_run *r, int h) {
+static double metric(const exp_run *r, measure m) {
   const exp_point *p = final_pt(r);
   if (!p) return NAN;
-  switch (h) {
-    case 0: return p->chamfer;
-    case 1: return p->floaters;
-    case 2: return p->floater_mass;
-    case 3: return p->gaussians;
-    case 4: return p->psnr;
+  switch (m) {
+    case M_CHAMFER: return p->chamfer;
+    case M_FLOATERS: return p->floaters;
+    case M_FLOATER_MASS: return p->floater_mass;
+    case M_GAUSSIANS: return p->gaussians;
+    case M_PSNR: return p->psnr;
     default: return p->ssim;
   }
 }
@@ -95,8 +106,9 @@ static const exp_run *find_run(const exp_report_in *in, const char *ds, const ch
   return NULL;
 }
 
-/* The count–PSNR curve of a variant on a dataset: one point per knob factor (means over seeds),
- * sorted by PSNR. Returns the number of points. */
+/* The count–PSNR points of a variant on a dataset by knob factor (means over seeds: PSNR
+ * arithmetic, count geometric), sorted by PSNR — the sweep as a table and h3.csv; the
+ * verdict reads the Pareto front of the individual runs instead. */
 typedef struct curve_pt { double factor, psnr, count; int seeds; } curve_pt;
 static int build_curve(const exp_report_in *in, const char *ds, const char *var, curve_pt *c, int cap) {
   int n = 0;
@@ -118,56 +130,82 @@ static int build_curve(const exp_report_in *in, const char *ds, const char *var,
   return n;
 }
 
-/* Count on the curve at PSNR p (log-linear); NAN outside its PSNR range. */
-static double curve_count_at(const curve_pt *c, int n, double p) {
-  if (n < 1 || !isfinite(p)) return NAN;
-  if (n == 1) return p == c[0].psnr ? c[0].count : NAN;
-  if (p < c[0].psnr || p > c[n - 1].psnr) return NAN;
-  for (int i = 0; i + 1 < n; i++)
-    if (p <= c[i + 1].psnr) {
-      double d = c[i + 1].psnr - c[i].psnr, t = d > 0 ? (p - c[i].psnr) / d : 0;
-      return exp((1 - t) * log(c[i].count) + t * log(c[i + 1].count));
-    }
-  return NAN;
+/* The Pareto front of every run (every knob factor, every seed) of var on ds; malloc'ed
+ * (NULL with *n = 0 when there is none). */
+static mgs_status variant_front(const exp_report_in *in, const char *ds, const char *var, mgs_stats_point **front, size_t *n,
+                                mgs_error *err) {
+  *front = NULL;
+  *n = 0;
+  size_t m = 0;
+  mgs_stats_point *pts = malloc((in->n_runs ? in->n_runs : 1) * sizeof *pts);
+  if (!pts) return mgs_error_set(err, MGS_ERR_NOMEM, "experiment report: out of memory (front)");
+  for (size_t i = 0; i < in->n_runs; i++) {
+    const exp_run *r = &in->runs[i];
+    const exp_point *p = final_pt(r);
+    if (!p || strcmp(r->dataset, ds) || strcmp(r->variant, var)) continue;
+    pts[m].count = p->gaussians;
+    pts[m].psnr = p->psnr;
+    m++;
+  }
+  *n = mgs_stats_pareto_front(pts, m, pts);
+  if (*n == 0) { free(pts); return MGS_OK; }
+  *front = pts;
+  return MGS_OK;
 }
 
-/* Verdict of hypothesis h for variant var on dataset ds. */
-static void hypothesis(const exp_report_in *in, const char *ds, const char *var, int h, exp_verdict *v, double *base_mean,
-                       double *base_sd) {
+/* The cell of hypothesis h for variant var on dataset ds (before Holm). */
+static mgs_status compute_cell(const exp_report_in *in, const char *ds, const char *var, const hyp_def *h, exp_cell *c,
+                               mgs_error *err) {
+  memset(c, 0, sizeof *c);
+  c->computed = 1;
+  c->p_holm = c->holm_level = c->holm_lo = c->holm_hi = NAN;
   double ch[64], bvals[64];
   int n = 0, nb = 0;
-  curve_pt curve[32];
-  int nc = h == 3 ? build_curve(in, ds, "baseline", curve, 32) : 0;
-  int outside = 0, zero_base = 0;
+  mgs_stats_point vpts[64];
   for (int s = 0; s < 64; s++) {
-    const exp_run *b = find_run(in, ds, "baseline", s, 1.0), *r = find_run(in, ds, var, s, 1.0);
-    double mb = b ? metric(b, h) : NAN;
-    if (b && isfinite(mb) && nb < 64) bvals[nb++] = mb;
-    if (!b || !r) continue;
-    double mv = metric(r, h);
-    if (!isfinite(mb) || !isfinite(mv)) continue;
-    double c;
-    if (h == 3) {
-      double nbp = curve_count_at(curve, nc, final_pt(r)->psnr);
-      if (!isfinite(nbp)) { outside++; continue; }
-      c = mv / nbp - 1;
-    } else if (HYPS[h].relative) {
-      if (!(mb > 0)) { zero_base++; continue; }
-      c = mv / mb - 1;
-    } else {
-      c = mv - mb;
+    const exp_run *b = find_run(in, ds, EXP_BASE, s, 1.0), *r = find_run(in, ds, var, s, 1.0);
+    double mb = b ? metric(b, h->what) : NAN;
+    if (b && isfinite(mb)) bvals[nb++] = mb;
+    if (h->front) {
+      if (r) { vpts[n].count = metric(r, M_GAUSSIANS); vpts[n].psnr = final_pt(r)->psnr; n++; }
+      continue;
     }
-    ch[n++] = c;
+    if (!b != !r) c->unpaired++;
+    if (!b || !r) continue;
+    ch[n++] = mgs_stats_change(metric(r, h->what) + h->offset, mb + h->offset, h->scale);
   }
-  *base_mean = mean_of(bvals, nb);
-  *base_sd = sd_of(bvals, nb);
-  double spread = HYPS[h].relative ? (*base_mean > 0 ? *base_sd / *base_mean : NAN) : *base_sd;
-  exp_verdict_compute(ch, n, spread, HYPS[h].direction, HYPS[h].target, v);
-  if (h == 3 && nc < 2) snprintf(v->note, sizeof v->note, "needs the knob sweep (baseline count-PSNR curve)");
-  else if (outside) snprintf(v->note, sizeof v->note, "%d seed(s) outside the baseline curve's PSNR range", outside);
-  else if (zero_base) snprintf(v->note, sizeof v->note, "baseline measure is 0 for %d seed(s)", zero_base);
+  c->base_mean = mean_of(bvals, nb);
+  c->base_sd = sd_of(bvals, nb);
+  mgs_stats_point *front = NULL;
+  if (h->front) {
+    mgs_status st = variant_front(in, ds, EXP_BASE, &front, &c->front_n, err);
+    if (st) return st;
+    mgs_stats_front_changes(front, c->front_n, vpts, (size_t)n, ch, &c->tally);
+    free(front);
+  }
+  mgs_status st = mgs_stats_interval_of(ch, (size_t)n, EXP_LEVEL, EXP_BOOT, &c->iv, err);
+  if (st) return st;
+  c->verdict = mgs_stats_verdict_of(c->iv.lo, c->iv.hi, h->direction, analysis_target(h));
+  size_t l = 0;
+#define NOTE(...) do { if (l < sizeof c->note) l += (size_t)snprintf(c->note + l, sizeof c->note - l, __VA_ARGS__); } while (0)
+  if (h->front) {
+    const mgs_stats_front_tally *t = &c->tally;
+    if (c->front_n == 0) NOTE("no %s sweep to compare with", EXP_BASE);
+    else if (t->below + t->above) {
+      NOTE("%d of %d seeds outside the front's PSNR range (%d below, %d above)", t->below + t->above, n, t->below, t->above);
+    }
+    if (t->dominated) NOTE("%s%d of %d seeds dominated by the front", l ? "; " : "", t->dominated, n);
+    if (t->invalid) NOTE("%s%d seeds without a measurement", l ? "; " : "", t->invalid);
+  } else {
+    if (n == 0) NOTE("no paired measurement");
+    else if (c->iv.skipped) NOTE("%d of %d seeds without a measurement%s", c->iv.skipped, n,
+                                 h->scale == MGS_STATS_LOG_RATIO ? " (or 0)" : "");
+    if (c->unpaired) NOTE("%s%d seeds unpaired", l ? "; " : "", c->unpaired);
+  }
+  if (c->iv.n == 1) NOTE("%s1 seed: no interval", l ? "; " : "");
+#undef NOTE
+  return MGS_OK;
 }
-
 static void fmt_or_na(char *buf, size_t n, const char *fmt, double v) {
   if (isfinite(v)) snprintf(buf, n, fmt, v);
   else if (isinf(v)) snprintf(buf, n, "inf");
@@ -220,18 +258,22 @@ static mgs_status write_plots(const exp_report_in *in, const char *ds, mgs_error
       double *x = buf + v * 2 * EXP_MAX_POINTS, *y = x + EXP_MAX_POINTS;
       size_t m;
       if (w < 3) m = mean_series(in, ds, in->variants[v].name, w, x, y);
-      else {
-        curve_pt c[32];
-        int nc = build_curve(in, ds, in->variants[v].name, c, 32);
-        for (int k = 0; k < nc; k++) { x[k] = c[k].psnr; y[k] = c[k].count; }
-        m = (size_t)nc;
+      else { /* each method's Pareto front (at most EXP_MAX_POINTS of its points) */
+        mgs_stats_point *front = NULL;
+        size_t nf = 0;
+        st = variant_front(in, ds, in->variants[v].name, &front, &nf, err);
+        if (st) break;
+        m = nf < EXP_MAX_POINTS ? nf : EXP_MAX_POINTS;
+        for (size_t k = 0; k < m; k++) { x[k] = front[k].psnr; y[k] = front[k].count; }
+        free(front);
       }
       if (m) { s[ns].name = in->variants[v].name; s[ns].n = m; s[ns].x = x; s[ns].y = y; ns++; }
     }
+    if (st) break;
     char base[4200], title[300];
     snprintf(base, sizeof base, "%s/%s_%s", pd, ds, w < 3 ? names[w] : "h3_count_psnr");
     if (w < 3) snprintf(title, sizeof title, "%s: %s against training wall time (mean over seeds)", ds, ylabels[w]);
-    else snprintf(title, sizeof title, "%s: Gaussians against test PSNR (densification knob sweep)", ds);
+    else snprintf(title, sizeof title, "%s: Pareto fronts, Gaussians against test PSNR (every knob setting and seed)", ds);
     st = exp_plot_lines(base, title, w < 3 ? "training wall time (s)" : "test PSNR (dB)", w < 3 ? ylabels[w] : "Gaussians",
                         s, ns, w == 3, err);
   }
@@ -293,20 +335,213 @@ static void run_row(FILE *f, const exp_run *r) {
           r->variant, r->seed, p->iteration, p->psnr, p->ssim, p->gaussians, ch, fs, fl, ms, b1, b2, bn, r->train_seconds, an);
 }
 
+/* "−12.3 % [−20.1, −4.0]" (log-ratios shown as %), "+0.12 dB [...]", "n/a". */
+static void fmt_interval(char *buf, size_t n, const hyp_def *h, const exp_cell *c) {
+  const char *f1 = h->scale == MGS_STATS_LOG_RATIO ? "%+.1f %%" : !strcmp(h->unit, "dB") ? "%+.2f dB" : "%+.4f";
+  const char *f3 = h->scale == MGS_STATS_LOG_RATIO ? "%+.1f %% [%+.1f, %+.1f]"
+                   : !strcmp(h->unit, "dB")       ? "%+.2f dB [%+.2f, %+.2f]"
+                                                  : "%+.4f [%+.4f, %+.4f]";
+  if (c->iv.n == 0) snprintf(buf, n, "n/a");
+  else if (c->iv.n == 1) snprintf(buf, n, f1, shown(h, c->iv.mean));
+  else snprintf(buf, n, f3, shown(h, c->iv.mean), shown(h, c->iv.lo), shown(h, c->iv.hi));
+}
+
+static void add_num(cJSON *o, const char *k, double v);
+
+static void cell_json(cJSON *o, const hyp_def *h, const exp_cell *c) {
+  cJSON_AddStringToObject(o, "verdict", mgs_stats_verdict_name(c->verdict));
+  cJSON_AddStringToObject(o, "verdict_holm", mgs_stats_verdict_name(c->verdict_holm));
+  cJSON_AddStringToObject(o, "scale", h->scale == MGS_STATS_LOG_RATIO ? "log-ratio" : "difference");
+  cJSON_AddNumberToObject(o, "seeds", c->iv.n);
+  cJSON_AddNumberToObject(o, "seeds_without_measurement", c->iv.skipped);
+  add_num(o, "change_mean", c->iv.mean);           /* on the analysis scale */
+  add_num(o, "change_sd", c->iv.sd);
+  add_num(o, "ci95_lo", c->iv.lo);
+  add_num(o, "ci95_hi", c->iv.hi);
+  add_num(o, "bootstrap95_lo", c->iv.boot_lo);
+  add_num(o, "bootstrap95_hi", c->iv.boot_hi);
+  add_num(o, "p", c->iv.p);
+  add_num(o, "p_holm", c->p_holm);
+  add_num(o, "holm_level", c->holm_level);
+  add_num(o, "holm_ci_lo", c->holm_lo);
+  add_num(o, "holm_ci_hi", c->holm_hi);
+  cJSON_AddStringToObject(o, "shown_as", h->scale == MGS_STATS_LOG_RATIO ? "percent" : h->unit);
+  add_num(o, "shown_mean", c->iv.n ? shown(h, c->iv.mean) : NAN);
+  add_num(o, "shown_ci95_lo", shown(h, c->iv.lo));
+  add_num(o, "shown_ci95_hi", shown(h, c->iv.hi));
+  add_num(o, "target", h->target);
+  add_num(o, "target_analysis_scale", analysis_target(h));
+  add_num(o, "baseline_mean", c->base_mean);
+  if (h->front) {
+    cJSON_AddNumberToObject(o, "front_points", (double)c->front_n);
+    cJSON_AddNumberToObject(o, "seeds_inside_front", c->tally.inside);
+    cJSON_AddNumberToObject(o, "seeds_below_front", c->tally.below);
+    cJSON_AddNumberToObject(o, "seeds_above_front", c->tally.above);
+    cJSON_AddNumberToObject(o, "seeds_dominated_by_front", c->tally.dominated);
+  }
+  cJSON_AddStringToObject(o, "note", c->note);
+}
+
+static int variant_compared(const exp_variant_status *v) {
+  return strcmp(v->name, EXP_BASE) && strcmp(v->status, "not available") && strcmp(v->status, "pending");
+}
+
+/* Every cell, then Holm within each family. cells[(d * nv + v) * N_HYPS + h]. */
+static mgs_status compute_cells(const exp_report_in *in, exp_cell *cells, mgs_error *err) {
+  const size_t nv = in->n_variants, total = in->n_datasets * nv * N_HYPS;
+  for (size_t d = 0; d < in->n_datasets; d++)
+    for (size_t v = 0; v < nv; v++)
+      for (size_t h = 0; h < N_HYPS; h++) {
+        exp_cell *c = &cells[(d * nv + v) * N_HYPS + h];
+        mgs_status st = compute_cell(in, in->dataset_names[d], in->variants[v].name, &HYPS[h], c, err);
+        if (st) return st;
+        c->computed = variant_compared(&in->variants[v]);
+      }
+  double *p = malloc((total ? total : 1) * sizeof *p), *adj = malloc((total ? total : 1) * sizeof *adj),
+         *lvl = malloc((total ? total : 1) * sizeof *lvl);
+  if (!p || !adj || !lvl) { free(p); free(adj); free(lvl); return mgs_error_set(err, MGS_ERR_NOMEM, "experiment report: out of memory (Holm)"); }
+  mgs_status st = MGS_OK;
+  for (size_t h0 = 0; h0 < N_HYPS && !st; h0++) {
+    int first = 1; /* each family once, at its first measure */
+    for (size_t k = 0; k < h0; k++) first &= strcmp(HYPS[k].family, HYPS[h0].family) != 0;
+    if (!first) continue;
+    for (size_t i = 0; i < total; i++) {
+      size_t h = i % N_HYPS;
+      p[i] = cells[i].computed && !strcmp(HYPS[h].family, HYPS[h0].family) ? cells[i].iv.p : NAN;
+    }
+    st = mgs_stats_holm(p, total, 1 - EXP_LEVEL, adj, lvl, err);
+    for (size_t i = 0; i < total && !st; i++) {
+      if (!cells[i].computed || strcmp(HYPS[i % N_HYPS].family, HYPS[h0].family)) continue;
+      exp_cell *c = &cells[i];
+      const hyp_def *h = &HYPS[i % N_HYPS];
+      c->p_holm = adj[i];
+      c->holm_level = lvl[i];
+      mgs_stats_interval_at(&c->iv, lvl[i], &c->holm_lo, &c->holm_hi);
+      c->verdict_holm = mgs_stats_verdict_holm(&c->iv, adj[i], 1 - EXP_LEVEL, lvl[i], h->direction, analysis_target(h));
+    }
+  }
+  free(p); free(adj); free(lvl);
+  return st;
+}
+
+/* "## Verdicts by hypothesis": one table per measure, every dataset and variant, and the
+ * count of each word (raw and after Holm). */
+static void write_hypothesis_tables(FILE *f, const exp_report_in *in, const exp_cell *cells, cJSON *root) {
+  const size_t nv = in->n_variants;
+  static const mgs_stats_verdict words[5] = {MGS_STATS_YES, MGS_STATS_PARTLY, MGS_STATS_NO, MGS_STATS_WORSE, MGS_STATS_NA};
+  fprintf(f, "## Verdicts by hypothesis\n\nEach MorseGS variant and Topology-GS against the 3DGS baseline, seed by seed. "
+             "Change = mean over seeds [95 %% t-interval]; p = paired t-test; Holm p = adjusted within the hypothesis' family.\n\n"
+             "| measure | cells | yes | partly | no | worse | n/a | after Holm: yes | partly | no | worse | n/a |\n"
+             "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  cJSON *js = cJSON_AddObjectToObject(root, "verdict_counts");
+  for (size_t h = 0; h < N_HYPS; h++) {
+    int raw[5] = {0}, holm[5] = {0}, cellsn = 0;
+    for (size_t d = 0; d < in->n_datasets; d++)
+      for (size_t v = 0; v < nv; v++) {
+        const exp_cell *c = &cells[(d * nv + v) * N_HYPS + h];
+        if (!c->computed) continue;
+        cellsn++;
+        for (int w = 0; w < 5; w++) { raw[w] += c->verdict == words[w]; holm[w] += c->verdict_holm == words[w]; }
+      }
+    fprintf(f, "| %s | %d |", HYPS[h].title, cellsn);
+    for (int w = 0; w < 5; w++) fprintf(f, " %d |", raw[w]);
+    for (int w = 0; w < 5; w++) fprintf(f, " %d |", holm[w]);
+    fprintf(f, "\n");
+    cJSON *o = cJSON_AddObjectToObject(js, HYPS[h].key), *a = cJSON_AddObjectToObject(o, "raw"), *b = cJSON_AddObjectToObject(o, "holm");
+    for (int w = 0; w < 5; w++) {
+      cJSON_AddNumberToObject(a, mgs_stats_verdict_name(words[w]), raw[w]);
+      cJSON_AddNumberToObject(b, mgs_stats_verdict_name(words[w]), holm[w]);
+    }
+  }
+  fprintf(f, "\n");
+  for (size_t h = 0; h < N_HYPS; h++) {
+    fprintf(f, "### %s (target %s %+g %s)\n\n| dataset | variant | seeds | change [95 %% interval] | word | p | Holm p | Holm word | note |\n"
+               "|---|---|---|---|---|---|---|---|---|\n", HYPS[h].title, HYPS[h].direction < 0 ? "<=" : ">=", HYPS[h].target, HYPS[h].unit);
+    for (size_t d = 0; d < in->n_datasets; d++)
+      for (size_t v = 0; v < nv; v++) {
+        const exp_cell *c = &cells[(d * nv + v) * N_HYPS + h];
+        if (!c->computed) continue;
+        char iv[96], p1[32], p2[32];
+        fmt_interval(iv, sizeof iv, &HYPS[h], c);
+        fmt_or_na(p1, sizeof p1, "%.2g", c->iv.p);
+        fmt_or_na(p2, sizeof p2, "%.2g", c->p_holm);
+        fprintf(f, "| %s | %s | %d | %s | %s | %s | %s | **%s** | %s |\n", in->dataset_names[d], in->variants[v].name, c->iv.n, iv,
+                mgs_stats_verdict_name(c->verdict), p1, p2, mgs_stats_verdict_name(c->verdict_holm), c->note);
+      }
+    fprintf(f, "\n");
+  }
+}
+
+/* "## Verdicts against the earlier report" (re-analysis of old results): for each measure,
+ * how many cells went from each old word to each new (Holm) word, then the cells that changed. */
+static void write_previous_comparison(FILE *f, const exp_report_in *in, const exp_cell *cells) {
+  char *text = NULL;
+  size_t len;
+  if (!in->previous_results || mgs_read_file(in->previous_results, &text, &len, NULL) != MGS_OK) return;
+  cJSON *prev = cJSON_Parse(text);
+  free(text);
+  if (!prev) return;
+  static const char *words[6] = {"yes", "partly", "no", "worse", "n/a", "(none)"};
+  const size_t nv = in->n_variants;
+  fprintf(f, "## Verdicts against the earlier report\n\nEarlier: `%s` (its rule: |mean change| > 2 max(baseline sd, sd of "
+             "the change), no correction, H3 on the sweep's means by knob factor). Now: the Holm word. Rows: the earlier "
+             "word; columns: the word now.\n\n", in->previous_results);
+  for (size_t h = 0; h < N_HYPS; h++) {
+    int m[6][6] = {{0}};
+    for (size_t d = 0; d < in->n_datasets; d++) {
+      const cJSON *od = NULL, *x;
+      cJSON_ArrayForEach(x, cJSON_GetObjectItem(prev, "datasets"))
+        if (cJSON_IsString(cJSON_GetObjectItem(x, "name")) && !strcmp(cJSON_GetObjectItem(x, "name")->valuestring, in->dataset_names[d])) od = x;
+      for (size_t v = 0; v < nv; v++) {
+        const exp_cell *c = &cells[(d * nv + v) * N_HYPS + h];
+        if (!c->computed) continue;
+        const char *old = NULL;
+        cJSON_ArrayForEach(x, cJSON_GetObjectItem(od, "variants"))
+          if (cJSON_IsString(cJSON_GetObjectItem(x, "name")) && !strcmp(cJSON_GetObjectItem(x, "name")->valuestring, in->variants[v].name)) {
+            const cJSON *w = cJSON_GetObjectItem(cJSON_GetObjectItem(cJSON_GetObjectItem(x, "hypotheses"), HYPS[h].key), "verdict");
+            if (cJSON_IsString(w)) old = w->valuestring;
+          }
+        int a = 5, b = 4;
+        for (int k = 0; k < 5; k++) {
+          if (old && !strcmp(old, words[k])) a = k;
+          if (!strcmp(mgs_stats_verdict_name(c->verdict_holm), words[k])) b = k;
+        }
+        m[a][b]++;
+      }
+    }
+    fprintf(f, "**%s**\n\n| earlier \\ now | yes | partly | no | worse | n/a |\n|---|---|---|---|---|---|\n", HYPS[h].title);
+    for (int a = 0; a < 6; a++) {
+      int any = 0;
+      for (int b = 0; b < 5; b++) any |= m[a][b];
+      if (!any) continue;
+      fprintf(f, "| %s |", words[a]);
+      for (int b = 0; b < 5; b++) fprintf(f, " %d |", m[a][b]);
+      fprintf(f, "\n");
+    }
+    fprintf(f, "\n");
+  }
+  cJSON_Delete(prev);
+}
+
 mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
-  mgs_status st = write_csvs(in, err);
-  if (st) return st;
+  const size_t n_cells = in->n_datasets * in->n_variants * N_HYPS;
+  exp_cell *cells = calloc(n_cells ? n_cells : 1, sizeof *cells);
+  if (!cells) return mgs_error_set(err, MGS_ERR_NOMEM, "experiment report: out of memory (%zu cells)", n_cells);
+#define CELL(d, v, h) (((d) * in->n_variants + (v)) * N_HYPS + (h))
+  mgs_status st = compute_cells(in, cells, err);
+  if (!st) st = write_csvs(in, err);
+  if (st) { free(cells); return st; }
   for (size_t d = 0; d < in->n_datasets && !st; d++) st = write_plots(in, in->dataset_names[d], err);
-  if (st) return st;
+  if (st) { free(cells); return st; }
   char *mdp = mgs_path_join(in->dir, "RESULTS.md");
   mgs_atomic_file *af = NULL;
   FILE *f = NULL;
   st = mgs_atomic_open(mdp, &af, &f, err);
   free(mdp);
-  if (st) return st;
+  if (st) { free(cells); return st; }
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "format", "morsegs-experiment-results");
-  cJSON_AddNumberToObject(root, "version", 1);
+  cJSON_AddNumberToObject(root, "version", 2); /* 2: intervals, Holm, Pareto front */
   cJSON_AddStringToObject(root, "command", in->command_line);
   time_t now = time(NULL);
   char date[64];
@@ -326,6 +561,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
 
   fprintf(f, "# morsegs experiment: results\n\n");
   fprintf(f, "Command: `%s`  \n", in->command_line);
+  if (in->source_note) fprintf(f, "%s  \n", in->source_note);
   fprintf(f, "Written %s by morsegs 0.1.0: %zu of %zu planned runs finished; %d iterations per run; %d seed(s).  \n", date,
           in->n_runs, in->planned_runs, in->iters, in->seeds);
   fprintf(f, "Load average (1 min) when the experiment started: %.2f; wall times are taken under whatever load the machine "
@@ -355,14 +591,26 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     "(all dimensions; inf when the numbers of essential classes differ).\n"
     "- Wall time at an evaluation point: the trainer's training seconds (train_stats.json) minus the time between that "
     "point's .ply and the final .ply. Analysis overhead: `analysis_seconds` of train_stats.json when the trainer reports it.\n"
-    "- Verdicts: per-seed change against the baseline run of the same seed (relative; dB for PSNR); mean +- sd over "
-    "seeds. Spread = the baseline's sd over seeds in the same units; noise = max(spread, sd of the change). \"yes\" = "
-    "|mean| > 2 noise, right direction, target reached (H1 <= -30 %%, H2 <= -90 %%, H3 <= -40 %%, H4 >= +0.5 dB PSNR and >= +0.01 SSIM); "
-    "\"partly\" = significant, right direction, short of the target; \"worse\" = significant, wrong direction; \"no\" = "
-    "not significant; \"n/a\" = fewer than 2 seeds or nothing to compare. H3 compares at equal PSNR: each seed's count "
-    "against the baseline's count-PSNR curve (knob sweep, log count interpolated in PSNR) at that seed's PSNR.\n\n",
+    "- Verdicts (stats/mgs_stats.h): per seed, the change against the baseline run of the same seed on a log scale - "
+    "log-ratio for Chamfer, floaters (count + 1, so 0 stays finite) and floater mass, shown as %%; the difference for PSNR "
+    "(dB) and SSIM. Over seeds: the mean and its 95 %% t-interval (n-1 degrees of freedom; the report's interval - a "
+    "percentile bootstrap is in RESULTS.json only, too narrow at 3-5 seeds) and the paired t-test's p. The word is read "
+    "from the interval: **yes** = wholly beyond the target (H1 -30 %%, H2 -90 %%, H3 -40 %%, H4 +0.5 dB PSNR, +0.01 SSIM); "
+    "**partly** = beyond 0 in the right direction only; **worse** = beyond 0 in the wrong direction; **no** = contains 0; "
+    "**n/a** = fewer than 2 seeds with a measurement (the reason is given).\n"
+    "- Multiple comparisons: Holm's step-down correction within each hypothesis' family (H1; H2 count and visible mass; "
+    "H3; H4 PSNR and SSIM), over every dataset and variant. The Holm word is **no** unless Holm rejects the cell (adjusted "
+    "p < 0.05); then it is the word of the wider interval at the level Holm tested that cell at, 1 - 0.05/(m - k + 1) for "
+    "the k-th smallest of m p-values (it then excludes 0). Both words are printed; the Holm word is the one to quote.\n"
+    "- H3 at equal PSNR: the baseline's Pareto front = the non-dominated (Gaussians, PSNR) points of all its runs (every "
+    "knob setting, every seed); a variant seed's change = log(its count / the front's count at its PSNR), log-count "
+    "interpolated linearly in PSNR along the front (monotone by construction). Seeds outside the front's PSNR range are "
+    "n/a and counted in the note, with how many of all seeds the front dominates outright (fewer Gaussians and higher "
+    "PSNR).\n\n",
     100 * EXP_VISIBLE_DIST_REL, EXP_SURFACE_TAU, in->n_datasets ? in->truths[0].res : EXP_TOPO_RES, 100 * EXP_PERS_REL);
 
+  write_previous_comparison(f, in, cells);
+  write_hypothesis_tables(f, in, cells, root);
   cJSON *jds = cJSON_AddArrayToObject(root, "datasets");
   for (size_t d = 0; d < in->n_datasets; d++) {
     const char *ds = in->dataset_names[d];
@@ -372,12 +620,14 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     cJSON_AddStringToObject(od, "name", ds);
     cJSON_AddStringToObject(od, "gt_mesh", t->mesh);
     fprintf(f, "## Dataset %s\n\n", ds);
-    if (t->diagram) {
+    if (t->mesh[0]) {
       char b1[32], b2[32];
       fmt_betti(b1, sizeof b1, t->betti);
       fmt_betti(b2, sizeof b2, t->betti_persistent);
-      fprintf(f, "GT mesh `%s`: SDF Betti numbers %s, persisting over %.4g: %s; voxel %.4g, band %d voxels, visible-floater "
-                 "distance %.4g.\n\n", t->mesh, b1, t->pers_threshold, b2, t->voxel, t->band, t->visible_dist);
+      char band[48] = "band not recorded"; /* a truth read back from a report (--report-from) */
+      if (t->band > 0) snprintf(band, sizeof band, "band %d voxels", t->band);
+      fprintf(f, "GT mesh `%s`: SDF Betti numbers %s, persisting over %.4g: %s; voxel %.4g, %s, visible-floater "
+                 "distance %.4g.\n\n", t->mesh, b1, t->pers_threshold, b2, t->voxel, band, t->visible_dist);
       cJSON_AddItemToObject(od, "gt_betti", cJSON_CreateIntArray(t->betti, 3));
       cJSON_AddItemToObject(od, "gt_betti_persistent", cJSON_CreateIntArray(t->betti_persistent, 3));
       cJSON_AddNumberToObject(od, "voxel", t->voxel);
@@ -387,14 +637,12 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       fprintf(f, "No GT mesh: geometry, floater and topology measures are n/a.\n\n");
     }
     /* verdicts */
-    fprintf(f, "### Verdicts: change against the baseline, mean ± sd over seeds\n\n| variant |");
+    fprintf(f, "### Verdicts against the baseline: mean change [95 %% interval] → word, Holm word\n\n| variant |");
     for (size_t h = 0; h < N_HYPS; h++) fprintf(f, " %s |", HYPS[h].title);
     fprintf(f, "\n|---|");
     for (size_t h = 0; h < N_HYPS; h++) fprintf(f, "---|");
     fprintf(f, "\n| target |");
-    for (size_t h = 0; h < N_HYPS; h++)
-      fprintf(f, HYPS[h].relative ? " <= %+.0f %% |" : " >= %+g %s |", HYPS[h].relative ? 100 * HYPS[h].target : HYPS[h].target,
-              HYPS[h].unit);
+    for (size_t h = 0; h < N_HYPS; h++) fprintf(f, " %s %+g %s |", HYPS[h].direction < 0 ? "<=" : ">=", HYPS[h].target, HYPS[h].unit);
     fprintf(f, "\n");
     cJSON *jvars = cJSON_AddArrayToObject(od, "variants");
     for (size_t v = 0; v < in->n_variants; v++) {
@@ -411,35 +659,23 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       }
       cJSON *oh = cJSON_AddObjectToObject(ov, "hypotheses");
       for (size_t h = 0; h < N_HYPS; h++) {
-        exp_verdict vd;
-        double bm, bs;
-        hypothesis(in, ds, var, (int)h, &vd, &bm, &bs);
+        const exp_cell *c = &cells[CELL(d, v, h)];
         cJSON *o = cJSON_AddObjectToObject(oh, HYPS[h].key);
-        if (!strcmp(var, "baseline")) {
+        if (!strcmp(var, EXP_BASE)) {
           char a[32], b[32];
-          fmt_or_na(a, sizeof a, "%.5g", bm);
-          fmt_or_na(b, sizeof b, "%.2g", bs);
+          fmt_or_na(a, sizeof a, "%.5g", c->base_mean);
+          fmt_or_na(b, sizeof b, "%.2g", c->base_sd);
           fprintf(f, " %s ± %s (reference) |", a, b);
           cJSON_AddStringToObject(o, "verdict", "reference");
-          add_num(o, "baseline_mean", bm);
-          add_num(o, "baseline_sd", bs);
+          add_num(o, "baseline_mean", c->base_mean);
+          add_num(o, "baseline_sd", c->base_sd);
           continue;
         }
-        double sc = HYPS[h].relative ? 100 : 1;
-        char a[32], b[32];
-        fmt_or_na(a, sizeof a, HYPS[h].fmt, vd.mean * sc);
-        fmt_or_na(b, sizeof b, HYPS[h].fmt_sd, vd.sd * sc);
-        fprintf(f, " %s ± %s %s → **%s**%s%s%s |", a, b, HYPS[h].unit, vd.verdict, vd.note[0] ? " (" : "",
-                vd.note, vd.note[0] ? ")" : "");
-        cJSON_AddStringToObject(o, "verdict", vd.verdict);
-        cJSON_AddStringToObject(o, "unit", HYPS[h].relative ? "relative" : "dB");
-        add_num(o, "change_mean", vd.mean);
-        add_num(o, "change_sd", vd.sd);
-        add_num(o, "spread", vd.spread);
-        cJSON_AddNumberToObject(o, "seeds", vd.n);
-        cJSON_AddNumberToObject(o, "target", HYPS[h].target);
-        add_num(o, "baseline_mean", bm);
-        cJSON_AddStringToObject(o, "note", vd.note);
+        char iv[96];
+        fmt_interval(iv, sizeof iv, &HYPS[h], c);
+        fprintf(f, " %s → **%s**, Holm **%s**%s%s%s |", iv, mgs_stats_verdict_name(c->verdict),
+                mgs_stats_verdict_name(c->verdict_holm), c->note[0] ? " (" : "", c->note, c->note[0] ? ")" : "");
+        cell_json(o, &HYPS[h], c);
       }
       fprintf(f, "\n");
     }
@@ -510,13 +746,33 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       for (int k = 0; k < nc; k++)
         fprintf(f, "| %s | %g | %d | %.3f | %.0f |\n", in->variants[v].name, c[k].factor, c[k].seeds, c[k].psnr, c[k].count);
     }
+    {
+      mgs_stats_point *front = NULL;
+      size_t nf = 0;
+      if ((st = variant_front(in, ds, EXP_BASE, &front, &nf, err))) break;
+      fprintf(f, "\nThe %s's Pareto front (what H3 compares with; every run, every knob setting): ", EXP_BASE);
+      if (!nf) fprintf(f, "none.\n");
+      for (size_t k = 0; k < nf; k++) fprintf(f, "%s%.0f Gaussians at %.3f dB", k ? ", " : "", front[k].count, front[k].psnr);
+      fprintf(f, "%s", nf ? ".\n" : "");
+      cJSON *jf = cJSON_AddArrayToObject(od, "baseline_front");
+      for (size_t k = 0; k < nf; k++) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "gaussians", front[k].count);
+        cJSON_AddNumberToObject(o, "psnr", front[k].psnr);
+        cJSON_AddItemToArray(jf, o);
+      }
+      free(front);
+    }
     fprintf(f, "\n### Curves\n\nCSV: [curves.csv](curves.csv) (every evaluation point), [h3.csv](h3.csv).\n\n");
     static const char *pl[4][2] = {{"psnr_time", "PSNR against wall time"}, {"chamfer_time", "Chamfer against wall time"},
                                    {"bottleneck_time", "bottleneck distance against wall time"},
-                                   {"h3_count_psnr", "Gaussians against PSNR"}};
+                                   {"h3_count_psnr", "Pareto fronts: Gaussians against PSNR"}};
     for (int k = 0; k < 4; k++) fprintf(f, "![%s](plots/%s_%s.png) ([SVG](plots/%s_%s.svg))\n", pl[k][1], ds, pl[k][0], ds, pl[k][0]);
     fprintf(f, "\n");
   }
+#undef CELL
+  free(cells);
+  if (st) { mgs_atomic_abort(af); cJSON_Delete(root); return st; }
   st = mgs_atomic_commit(af, err);
   char *text = cJSON_Print(root);
   cJSON_Delete(root);
@@ -524,5 +780,176 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
   if (!st) st = text && jp ? mgs_write_file_atomic(jp, text, strlen(text), err) : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
   free(text);
   free(jp);
+  return st;
+}
+
+/* ---------------------------------------------------------------- re-analysis */
+static const char CURVES_HEADER[] =
+  "dataset,variant,seed,knob_factor,iteration,wall_seconds,psnr,ssim,gaussians,chamfer,fscore,floaters,"
+  "floaters_fraction,floater_mass,floater_mass_fraction,betti0,betti1,betti2,pbetti0,pbetti1,pbetti2,"
+  "bottleneck,train_seconds,analysis_seconds";
+
+static int in_list(const char *csv, const char *name) {
+  size_t l = strlen(name);
+  for (const char *p = csv; p && *p;) {
+    const char *e = strchr(p, ',');
+    size_t n = e ? (size_t)(e - p) : strlen(p);
+    if (n == l && !strncmp(p, name, l)) return 1;
+    p = e ? e + 1 : NULL;
+  }
+  return 0;
+}
+
+/* FROM/curves.csv -> runs (one per dataset, variant, seed, knob factor; points in file order). */
+static mgs_status read_curves(const char *path, const char *keep, exp_run **runs, size_t *n_runs, mgs_error *err) {
+  char *text = NULL;
+  size_t len;
+  *runs = NULL;
+  *n_runs = 0;
+  mgs_status st = mgs_read_file(path, &text, &len, err);
+  if (st) return st;
+  size_t cap = 0, n = 0;
+  exp_run *r = NULL;
+  int line_no = 0;
+  char *save = NULL;
+  for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+    line_no++;
+    line[strcspn(line, "\r")] = 0;
+    if (line_no == 1) {
+      if (strcmp(line, CURVES_HEADER)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a curves.csv of morsegs experiment (header)", path); break; }
+      continue;
+    }
+    char *f[24], *sv = NULL;
+    int k = 0;
+    for (char *t = strtok_r(line, ",", &sv); t && k < 24; t = strtok_r(NULL, ",", &sv)) f[k++] = t;
+    if (k != 24) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: %d fields, want 24", path, line_no, k); break; }
+    if (keep && strcmp(f[1], EXP_BASE) && !in_list(keep, f[1])) continue;
+    double v[24];
+    for (int q = 2; q < 24; q++) {
+      char *end;
+      v[q] = strtod(f[q], &end);
+      if (end == f[q] || *end) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: field %d is not a number ('%s')", path, line_no, q + 1, f[q]); break; }
+    }
+    if (st) break;
+    exp_run *run = NULL;
+    for (size_t i = 0; i < n && !run; i++)
+      if (!strcmp(r[i].dataset, f[0]) && !strcmp(r[i].variant, f[1]) && r[i].seed == (int)v[2] && r[i].factor == v[3]) run = &r[i];
+    if (!run) {
+      if (n == cap) {
+        size_t nc = cap ? 2 * cap : 64;
+        exp_run *p = realloc(r, nc * sizeof *p);
+        if (!p) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory (%zu runs)", path, nc); break; }
+        r = p;
+        cap = nc;
+      }
+      run = &r[n++];
+      memset(run, 0, sizeof *run);
+      snprintf(run->dataset, sizeof run->dataset, "%s", f[0]);
+      snprintf(run->variant, sizeof run->variant, "%s", f[1]);
+      run->seed = (int)v[2];
+      run->factor = v[3];
+      run->train_seconds = v[22];
+      run->analysis_seconds = v[23];
+    }
+    if (run->n_points == EXP_MAX_POINTS) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: more than %d points in one run", path, line_no, EXP_MAX_POINTS); break; }
+    exp_point *p = &run->pt[run->n_points++];
+    memset(p, 0, sizeof *p);
+    p->iteration = (int)v[4];
+    if (p->iteration > run->iters) run->iters = p->iteration;
+    p->wall_seconds = v[5]; p->psnr = v[6]; p->ssim = v[7]; p->gaussians = v[8]; p->chamfer = v[9]; p->fscore = v[10];
+    p->floaters = v[11]; p->floaters_fraction = v[12]; p->floater_mass = v[13]; p->floater_mass_fraction = v[14];
+    for (int q = 0; q < 3; q++) { p->betti[q] = (int)v[15 + q]; p->betti_persistent[q] = (int)v[18 + q]; }
+    p->bottleneck = v[21];
+    p->measure_seconds = NAN;
+  }
+  free(text);
+  if (st) { free(r); return st; }
+  *runs = r;
+  *n_runs = n;
+  return MGS_OK;
+}
+
+static double json_num(const cJSON *o, const char *k, double dflt) {
+  const cJSON *x = cJSON_GetObjectItem(o, k);
+  return cJSON_IsNumber(x) ? x->valuedouble : dflt;
+}
+
+static void json_ints3(const cJSON *o, const char *k, int *v) {
+  const cJSON *a = cJSON_GetObjectItem(o, k);
+  for (int q = 0; q < 3; q++) {
+    const cJSON *x = cJSON_GetArrayItem(a, q);
+    v[q] = cJSON_IsNumber(x) ? x->valueint : -1;
+  }
+}
+
+mgs_status exp_report_from_results(const char *from, const char *out, const char *variants, mgs_error *err) {
+  char *cp = mgs_path_join(from, "curves.csv"), *jp = mgs_path_join(from, "RESULTS.json"), *text = NULL;
+  exp_run *runs = NULL;
+  size_t n_runs = 0, len;
+  cJSON *j = NULL;
+  exp_truth *truths = NULL;
+  exp_variant_status *vs = NULL;
+  const char **names = NULL;
+  char *command = NULL, *note = NULL;
+  mgs_status st = cp && jp ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  if (!st) st = read_curves(cp, variants, &runs, &n_runs, err);
+  if (!st) st = mgs_read_file(jp, &text, &len, err);
+  if (!st && !(j = cJSON_Parse(text))) st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: not JSON", jp);
+  const cJSON *jds = j ? cJSON_GetObjectItem(j, "datasets") : NULL, *jvs = j ? cJSON_GetObjectItem(j, "variants") : NULL;
+  if (!st && (!cJSON_IsArray(jds) || !cJSON_IsArray(jvs)))
+    st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: no datasets or variants (not a RESULTS.json of morsegs experiment)", jp);
+  size_t nd = st ? 0 : (size_t)cJSON_GetArraySize(jds), nv = st ? 0 : (size_t)cJSON_GetArraySize(jvs), kv = 0;
+  if (!st) {
+    truths = calloc(nd ? nd : 1, sizeof *truths);
+    names = calloc(nd ? nd : 1, sizeof *names);
+    vs = calloc(nv ? nv : 1, sizeof *vs);
+    if (!truths || !names || !vs) st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  }
+  const cJSON *defs = j ? cJSON_GetObjectItem(j, "definitions") : NULL;
+  for (size_t d = 0; d < nd && !st; d++) {
+    const cJSON *o = cJSON_GetArrayItem(jds, (int)d), *nm = cJSON_GetObjectItem(o, "name"), *mesh = cJSON_GetObjectItem(o, "gt_mesh");
+    if (!cJSON_IsString(nm)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: dataset %zu has no name", jp, d); break; }
+    names[d] = nm->valuestring;
+    exp_truth *t = &truths[d];
+    t->res = (int)json_num(defs, "topology_voxels_per_gt_diagonal", EXP_TOPO_RES);
+    if (cJSON_IsString(mesh)) snprintf(t->mesh, sizeof t->mesh, "%s", mesh->valuestring);
+    json_ints3(o, "gt_betti", t->betti);
+    json_ints3(o, "gt_betti_persistent", t->betti_persistent);
+    t->voxel = json_num(o, "voxel", NAN);
+    t->pers_threshold = json_num(o, "persistence_threshold", NAN);
+    t->visible_dist = json_num(o, "visible_floater_distance", NAN);
+  }
+  for (size_t v = 0; v < nv && !st; v++) {
+    const cJSON *o = cJSON_GetArrayItem(jvs, (int)v), *nm = cJSON_GetObjectItem(o, "name"), *s = cJSON_GetObjectItem(o, "status"),
+                *rs = cJSON_GetObjectItem(o, "reason");
+    if (!cJSON_IsString(nm)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: variant %zu has no name", jp, v); break; }
+    if (variants && strcmp(nm->valuestring, EXP_BASE) && !in_list(variants, nm->valuestring)) continue;
+    snprintf(vs[kv].name, sizeof vs[kv].name, "%s", nm->valuestring);
+    snprintf(vs[kv].status, sizeof vs[kv].status, "%s", cJSON_IsString(s) ? s->valuestring : "available");
+    snprintf(vs[kv].reason, sizeof vs[kv].reason, "%s", cJSON_IsString(rs) ? rs->valuestring : "");
+    kv++;
+  }
+  if (!st) st = mgs_mkdir_p(out, err);
+  if (!st) {
+    const cJSON *cmd = cJSON_GetObjectItem(j, "command"), *wr = cJSON_GetObjectItem(j, "written"), *kn = cJSON_GetObjectItem(defs, "knobs");
+    size_t lc = strlen(from) + strlen(out) + (variants ? strlen(variants) : 0) + 96;
+    size_t ln = (cJSON_IsString(cmd) ? strlen(cmd->valuestring) : 0) + 256;
+    command = malloc(lc);
+    note = malloc(ln);
+    if (!command || !note) st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+    else {
+      snprintf(command, lc, "morsegs experiment --report-from %s -o %s%s%s", from, out, variants ? " --variants " : "", variants ? variants : "");
+      snprintf(note, ln, "Re-analysis, no training: the %zu runs of `%s` (written %s), read from its curves.csv.",
+               n_runs, cJSON_IsString(cmd) ? cmd->valuestring : "?", cJSON_IsString(wr) ? wr->valuestring : "?");
+      exp_report_in in = {.dir = out, .command_line = command, .iters = (int)json_num(j, "iterations", 0),
+                          .seeds = (int)json_num(j, "seeds", 0), .knob_desc = cJSON_IsString(kn) ? kn->valuestring : "",
+                          .n_datasets = nd, .dataset_names = names, .truths = truths, .n_variants = kv, .variants = vs,
+                          .n_runs = n_runs, .runs = runs, .planned_runs = n_runs, .load_start = json_num(j, "load_average_at_start", NAN),
+                          .source_note = note, .previous_results = jp};
+      st = exp_report_write(&in, err);
+    }
+  }
+  cJSON_Delete(j);
+  free(text); free(cp); free(jp); free(runs); free(truths); free(names); free(vs); free(command); free(note);
   return st;
 }

@@ -2,8 +2,11 @@
 # The README's experiment (issue 10), not in the test command: every variant x 3 seeds on
 # the three built-in scenes and two meshes nobody here made (netgen-doc's hinge.stl,
 # genus 5; gmsh-doc's lever.stl.gz), by default 7000 iterations, 96x96 views (30 train /
-# 8 test). About 180 runs; ~13 h on 2 cores. Resumable: run the same command again,
-# finished runs are kept (`morsegs experiment` reuses DIR).
+# 8 test). 135 main runs (5 scenes x 9 variants x 3 seeds) + 180 H3 sweep runs (baseline,
+# morse-d, morse-full x 4 knob settings besides x1 x 3 seeds x 5 scenes; evaluated once,
+# without the topology measures); the 2026-11-24 table (180 runs with a 2-setting, 1-seed
+# sweep) took ~13 h at this size. Resumable: run the same command again, finished runs are
+# kept (`morsegs experiment` reuses DIR).
 # ITERS, RES (square views), VIEWS, TEST_VIEWS, EVALS override the schedule; the README's
 # table is ITERS=5000 RES=64 VIEWS=24 TEST_VIEWS=6 EVALS=3 (~2 h on 2 cores).
 #   scripts/experiment_full.sh [DIR]     (default exp-full; build/ must hold morsegs)
@@ -31,4 +34,4 @@ if [ ! -f "$dir/scenes/lever/scene.json" ]; then
 fi
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment \
   "$dir/scenes/sphere" "$dir/scenes/genus2" "$dir/scenes/thin" "$dir/scenes/hinge" "$dir/scenes/lever" \
-  -o "$dir/full" --iters "$ITERS" --evals "$EVALS" --seeds 3 --sweep 0.5,2
+  -o "$dir/full" --iters "$ITERS" --evals "$EVALS" --seeds 3 --sweep 0.25,0.5,2,4

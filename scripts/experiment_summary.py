@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """One table across datasets from `morsegs experiment`'s RESULTS.json: for each variant and
 hypothesis, the change against the baseline per dataset (mean over seeds) and the verdicts
-counted. Prints Markdown (the README's verdict table is this script's output).
+counted (after Holm's correction when the report has it). Prints Markdown (the README's verdict table is this script's output).
 
 usage: scripts/experiment_summary.py [--compact] DIR/RESULTS.json
   --compact: one row per variant, one cell per hypothesis (verdict counts over the datasets
@@ -16,9 +16,23 @@ HYPS = [("H1", "H1 Chamfer", "%"), ("H2", "H2 floaters (seed's count)", "%"),
         ("H4", "H4 PSNR", "dB"), ("H4_ssim", "H4 SSIM", "")]
 
 
+def word(h):
+    """The verdict to quote: after Holm's correction when the report has it (version 2)."""
+    return h.get("verdict_holm", h.get("verdict", "n/a"))
+
+
+def change(h, unit):
+    """The mean change as a fraction (%) or in the unit: version 2 reports log-ratios and
+    their display value (shown_mean, in %); version 1 a relative change_mean."""
+    if "shown_mean" in h:
+        m = h.get("shown_mean")
+        return None if m is None else (m / 100 if unit == "%" else m)
+    return h.get("change_mean")
+
+
 def fmt(h, unit):
-    m = h.get("change_mean")
-    if m is None or h.get("verdict") in (None, "n/a"):
+    m = change(h, unit)
+    if m is None or word(h) in (None, "n/a"):
         return "n/a"
     if unit == "%":
         return "%+.0f %%" % (100 * m)
@@ -39,9 +53,9 @@ def compact(d, variants):
             for ds in d["datasets"]:
                 v = next((x for x in ds["variants"] if x["name"] == vn), None)
                 h = (v or {}).get("hypotheses", {}).get(key, {})
-                verdicts.append(h.get("verdict", "n/a"))
-                if h.get("verdict") not in (None, "n/a") and h.get("change_mean") is not None:
-                    changes.append(h["change_mean"])
+                verdicts.append(word(h))
+                if word(h) not in (None, "n/a") and change(h, unit) is not None:
+                    changes.append(change(h, unit))
             parts = ["%d %s" % (verdicts.count(k), k) for k in ("yes", "partly", "worse") if verdicts.count(k)]
             if not parts:
                 parts = ["no" if verdicts.count("no") else "n/a"]
@@ -83,7 +97,7 @@ def main():
             for ds in d["datasets"]:
                 v = next((x for x in ds["variants"] if x["name"] == vn), None)
                 h = (v or {}).get("hypotheses", {}).get(key, {})
-                verdict = h.get("verdict", "n/a")
+                verdict = word(h)
                 counts[verdict if verdict in counts else "n/a"] += 1
                 cell = fmt(h, unit)
                 if verdict in ("yes", "partly", "worse"):

@@ -76,7 +76,7 @@ int main(void) {
   CHECK(mgs_test_sh("'%s' scene --builtin sphere -o '%s' --views 8 --test-views 2 --width 48 --height 48 --spp 1 --init-points 1500 -q",
            cli, ds) == 0);
   char *const args[] = {(char *)"morsegs", (char *)"experiment", ds, (char *)"-o", out, (char *)"--iters", (char *)"700",
-                        (char *)"--seeds", (char *)"2", (char *)"--evals", (char *)"2", (char *)"--sweep", (char *)"2",
+                        (char *)"--seeds", (char *)"2", (char *)"--evals", (char *)"2", (char *)"--sweep", (char *)"2", (char *)"--sweep-seeds", (char *)"1",
                         (char *)"--topo-res", (char *)"96", (char *)"--variants", (char *)"baseline,bogus",
                         (char *)"--variant", (char *)"bogus=--no-such-flag 1", NULL};
   /* first invocation, killed once its first run is finished */

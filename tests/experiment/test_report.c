@@ -1,101 +1,29 @@
-/* morsegs experiment, pieces that need no training: the verdict rules (each outcome and its
- * edges), run records written and read back, the report's verdicts and H3 interpolation on
- * synthetic runs, and the ground-truth SDF topology of meshes of known genus (sphere:
- * Betti (1,0,0); torus: (1,1,0)). */
+/* The report of `morsegs experiment` through the command, on constructed runs (no
+ * training): a curves.csv and RESULTS.json as an earlier experiment leaves them, re-analysed
+ * by `morsegs experiment --report-from`. Checks the verdicts the report derives (interval,
+ * word, Holm word), H3 against the baseline's Pareto front with a seed outside its range
+ * counted, one seed and missing measurements as n/a with a reason, the comparison with the
+ * earlier verdicts, and the files. The statistics themselves are tests/stats'. */
 #include <math.h>
 #include <cjson/cJSON.h>
 #include "mgs_test.h"
-#include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
-#include "topo/mgs_diagram_plot.h"
 
-static void test_verdict_rules(void) {
-  exp_verdict v;
-  double big_drop[3] = {-0.45, -0.50, -0.48};
-  exp_verdict_compute(big_drop, 3, 0.02, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "yes"));
-  CHECK_NEAR(v.mean, -0.47666667, 1e-6);
-  CHECK_NEAR(v.sd, sqrt((0.02666667 * 0.02666667 + 0.02333333 * 0.02333333 + 0.00333333 * 0.00333333) / 2), 1e-6);
-  double small_drop[3] = {-0.10, -0.12, -0.11};
-  exp_verdict_compute(small_drop, 3, 0.02, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "partly"));
-  double rise[3] = {0.10, 0.12, 0.11};
-  exp_verdict_compute(rise, 3, 0.02, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "worse"));
-  /* the target reached but within twice the baseline's spread: not significant */
-  exp_verdict_compute(big_drop, 3, 0.25, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "no"));
-  /* a noisy change: its own sd counts as noise too */
-  double noisy[3] = {-0.9, 0.1, -0.6};
-  exp_verdict_compute(noisy, 3, 0.0, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "no"));
-  /* higher is better (H4, dB) */
-  double db[2] = {0.8, 0.7};
-  exp_verdict_compute(db, 2, 0.05, +1, 0.5, &v);
-  CHECK(!strcmp(v.verdict, "yes"));
-  double db_short[2] = {0.3, 0.31};
-  exp_verdict_compute(db_short, 2, 0.05, +1, 0.5, &v);
-  CHECK(!strcmp(v.verdict, "partly"));
-  /* one seed: no spread, no verdict */
-  exp_verdict_compute(big_drop, 1, 0.02, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "n/a"));
-  exp_verdict_compute(big_drop, 0, 0.02, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "n/a"));
-  /* spread unknown (NaN) */
-  exp_verdict_compute(big_drop, 3, NAN, -1, -0.30, &v);
-  CHECK(!strcmp(v.verdict, "n/a"));
-  /* identical results: zero change, zero noise -> no */
-  double zero[2] = {0, 0};
-  exp_verdict_compute(zero, 2, 0, -1, -0.3, &v);
-  CHECK(!strcmp(v.verdict, "no"));
-}
+static const char HEADER[] =
+  "dataset,variant,seed,knob_factor,iteration,wall_seconds,psnr,ssim,gaussians,chamfer,fscore,floaters,"
+  "floaters_fraction,floater_mass,floater_mass_fraction,betti0,betti1,betti2,pbetti0,pbetti1,pbetti2,"
+  "bottleneck,train_seconds,analysis_seconds\n";
 
-static void fill_run(exp_run *r, const char *var, int seed, double factor, double psnr, double gaussians, double chamfer,
-                     double floaters) {
-  memset(r, 0, sizeof *r);
-  snprintf(r->dataset, sizeof r->dataset, "toy");
-  snprintf(r->variant, sizeof r->variant, "%s", var);
-  r->seed = seed;
-  r->factor = factor;
-  r->iters = 100;
-  r->train_seconds = 10 + seed;
-  r->analysis_seconds = NAN;
-  r->n_points = 2;
-  for (int k = 0; k < 2; k++) {
-    exp_point *p = &r->pt[k];
-    p->iteration = 50 * (k + 1);
-    p->wall_seconds = r->train_seconds * (k + 1) / 2;
-    p->psnr = psnr - (1 - k);
-    p->ssim = 0.9;
-    p->gaussians = gaussians;
-    p->chamfer = chamfer * (k ? 1 : 1.5);
-    p->fscore = 0.5;
-    p->floaters = floaters;
-    p->floaters_fraction = floaters / gaussians;
-    p->floater_mass = floaters * 0.1;
-    p->floater_mass_fraction = 0.01;
-    for (int q = 0; q < 3; q++) p->betti[q] = p->betti_persistent[q] = q == 0;
-    p->bottleneck = k ? INFINITY : 0.05;
+static int n_points = 0;
+
+/* Two evaluation points per main run (the final one at iteration 100), one per sweep run. */
+static void run(FILE *f, const char *var, int seed, double factor, double psnr, double gaussians, double chamfer, double floaters) {
+  for (int k = factor == 1 ? 0 : 1; k < 2; k++) {
+    fprintf(f, "toy,%s,%d,%g,%d,%g,%.6g,0.9,%.0f,%.9g,0.5,%.0f,0.01,%g,0.01,1,0,0,1,0,0,%s,%d,nan\n", var, seed, factor,
+            50 * (k + 1), 5.0 * (k + 1), psnr - (1 - k), gaussians, chamfer * (k ? 1 : 1.5), floaters, 0.1 * floaters,
+            k ? "inf" : "0.05", 10 + seed);
+    n_points++;
   }
-}
-
-static void test_run_record(void) {
-  const char *dir = mgs_test_tmpdir("exp_record");
-  exp_run a, b;
-  fill_run(&a, "baseline", 2, 0.5, 25.0, 1234, 0.01, 7);
-  a.pt[0].chamfer = NAN;
-  char path[512];
-  snprintf(path, sizeof path, "%s/result.json", dir);
-  mgs_error err;
-  CHECK_OK(exp_run_write(path, &a, &err), &err);
-  CHECK_OK(exp_run_read(path, &b, &err), &err);
-  CHECK(!strcmp(b.variant, "baseline") && b.seed == 2 && b.factor == 0.5 && b.iters == 100 && b.n_points == 2);
-  CHECK(isnan(b.pt[0].chamfer) && isnan(b.analysis_seconds));
-  CHECK(isinf(b.pt[1].bottleneck) && b.pt[0].bottleneck == 0.05);
-  CHECK(b.pt[1].psnr == a.pt[1].psnr && b.pt[1].gaussians == 1234 && b.pt[1].betti[0] == 1 && b.pt[1].betti[1] == 0);
-  /* a damaged record is refused (the run is then redone) */
-  CHECK_OK(mgs_write_file_atomic(path, "{\"format\":\"x\"}", 14, &err), &err);
-  CHECK(exp_run_read(path, &b, &err) == MGS_ERR_FORMAT);
 }
 
 static cJSON *hyp(cJSON *root, const char *var, const char *h) {
@@ -105,179 +33,128 @@ static cJSON *hyp(cJSON *root, const char *var, const char *h) {
       return cJSON_GetObjectItem(cJSON_GetObjectItem(v, "hypotheses"), h);
   return NULL;
 }
-
-static void test_report(void) {
-  const char *dir = mgs_test_tmpdir("exp_report");
-  exp_run runs[16];
-  int n = 0;
-  /* baseline: 3 seeds + a knob sweep giving the count-PSNR curve (24 dB @ 1000 .. 26 dB @ 4000) */
-  fill_run(&runs[n++], "baseline", 0, 1.0, 25.00, 2000, 0.0100, 100);
-  fill_run(&runs[n++], "baseline", 1, 1.0, 25.02, 2010, 0.0101, 104);
-  fill_run(&runs[n++], "baseline", 2, 1.0, 24.98, 1990, 0.0099, 96);
-  fill_run(&runs[n++], "baseline", 0, 4.0, 24.00, 1000, 0.0120, 50);
-  fill_run(&runs[n++], "baseline", 0, 0.25, 26.00, 4000, 0.0090, 200);
-  /* "good": Chamfer -50 %, floaters -95 %, 1000 Gaussians at 25 dB (the baseline needs 2000: -50 %), +0.6 dB */
-  fill_run(&runs[n++], "good", 0, 1.0, 25.60, 1414.2, 0.0050, 5);
-  fill_run(&runs[n++], "good", 1, 1.0, 25.62, 1420, 0.0051, 5);
-  fill_run(&runs[n++], "good", 2, 1.0, 25.58, 1410, 0.0049, 5);
-  /* "bad": Chamfer +20 %, PSNR -1 dB, outside the baseline curve for one seed */
-  fill_run(&runs[n++], "bad", 0, 1.0, 24.0, 2000, 0.0120, 100);
-  fill_run(&runs[n++], "bad", 1, 1.0, 24.02, 2000, 0.0121, 104);
-  fill_run(&runs[n++], "bad", 2, 1.0, 23.5, 2000, 0.0119, 96);
-  exp_variant_status vs[3] = {{"baseline", "available", ""}, {"good", "available", ""}, {"bad", "available", ""}};
-  exp_truth t;
-  memset(&t, 0, sizeof t);
-  t.res = 256;
-  const char *names[1] = {"toy"};
-  exp_report_in in = {.dir = dir, .command_line = "morsegs experiment toy", .iters = 100, .seeds = 3, .knob_desc = "",
-                      .n_datasets = 1, .dataset_names = names, .truths = &t, .n_variants = 3, .variants = vs,
-                      .n_runs = (size_t)n, .runs = runs, .planned_runs = (size_t)n, .load_start = 1.0};
-  mgs_error err;
-  CHECK_OK(exp_report_write(&in, &err), &err);
-  char path[512], *text = NULL;
-  size_t len;
-  snprintf(path, sizeof path, "%s/RESULTS.json", dir);
-  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
-  cJSON *root = cJSON_Parse(text);
-  CHECK(root != NULL);
-  cJSON *h;
-  h = hyp(root, "good", "H1");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "yes"));
-  CHECK(h && fabs(cJSON_GetObjectItem(h, "change_mean")->valuedouble + 0.5) < 1e-3);
-  h = hyp(root, "good", "H2");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "yes"));
-  h = hyp(root, "good", "H3");
-  /* at 25.6 dB the baseline curve (log-linear between 25.0 dB/2000 and 26 dB/4000) needs
-     2000 * 2^0.6 = 3031 Gaussians; 1414.2 / 3031 - 1 = -53 % */
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "yes"));
-  CHECK(h && fabs(cJSON_GetObjectItem(h, "change_mean")->valuedouble - (1414.2 / (2000 * pow(2, 0.6)) - 1)) < 0.01);
-  h = hyp(root, "good", "H4");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "yes"));
-  h = hyp(root, "good", "H4_ssim"); /* SSIM equal in every run */
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "no"));
-  h = hyp(root, "bad", "H1");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "worse"));
-  h = hyp(root, "bad", "H4");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "worse"));
-  h = hyp(root, "bad", "H3"); /* 23.5 dB is below the curve: that seed is left out */
-  CHECK(h && cJSON_GetObjectItem(h, "seeds")->valueint == 2 && strstr(cJSON_GetObjectItem(h, "note")->valuestring, "outside"));
-  h = hyp(root, "baseline", "H1");
-  CHECK(h && !strcmp(cJSON_GetObjectItem(h, "verdict")->valuestring, "reference"));
-  cJSON_Delete(root);
-  free(text);
-  static const char *files[] = {"RESULTS.md", "curves.csv", "h3.csv", "plots/toy_psnr_time.png", "plots/toy_psnr_time.svg",
-                                "plots/toy_chamfer_time.png", "plots/toy_chamfer_time.svg", "plots/toy_h3_count_psnr.png"};
-  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
-    snprintf(path, sizeof path, "%s/%s", dir, files[i]);
-    CHECK_MSG(mgs_path_exists(path), "%s missing", path);
-  }
-  /* the curves CSV holds every evaluation point of every run */
-  snprintf(path, sizeof path, "%s/curves.csv", dir);
-  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
-  int lines = 0;
-  for (char *q = text; q && *q; q++) lines += *q == '\n';
-  CHECK(lines == 1 + 2 * n);
-  free(text);
+static const char *str(cJSON *o, const char *k) {
+  cJSON *x = cJSON_GetObjectItem(o, k);
+  return cJSON_IsString(x) ? x->valuestring : "";
 }
-
-/* A torus (R, r) or a UV sphere (R, r = 0) as a closed triangle mesh. */
-static mgs_mesh *make_mesh(double R, double r, int nu, int nv) {
-  int sphere = r == 0;
-  size_t nvert = sphere ? (size_t)(nu * (nv - 1) + 2) : (size_t)(nu * nv);
-  size_t ntri = sphere ? (size_t)(2 * nu * (nv - 1)) : (size_t)(2 * nu * nv);
-  mgs_mesh *m = mgs_mesh_create(nvert, ntri);
-  size_t t = 0;
-  if (!sphere) {
-    for (int i = 0; i < nu; i++)
-      for (int j = 0; j < nv; j++) {
-        double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
-        float *p = m->v + 3 * (size_t)(i * nv + j);
-        p[0] = (float)((R + r * cos(v)) * cos(u)); p[1] = (float)((R + r * cos(v)) * sin(u)); p[2] = (float)(r * sin(v));
-        uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j), c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv),
-                 d = (uint32_t)(i * nv + (j + 1) % nv);
-        uint32_t *q = m->t + 3 * t;
-        q[0] = a; q[1] = b; q[2] = c; q[3] = a; q[4] = c; q[5] = d;
-        t += 2;
-      }
-  } else {
-    /* vertices: rings 1..nv-1, then the poles */
-    for (int j = 1; j < nv; j++)
-      for (int i = 0; i < nu; i++) {
-        double th = M_PI * j / nv, ph = 2 * M_PI * i / nu;
-        float *p = m->v + 3 * (size_t)((j - 1) * nu + i);
-        p[0] = (float)(R * sin(th) * cos(ph)); p[1] = (float)(R * sin(th) * sin(ph)); p[2] = (float)(R * cos(th));
-      }
-    uint32_t top = (uint32_t)(nu * (nv - 1)), bot = top + 1;
-    m->v[3 * top] = 0; m->v[3 * top + 1] = 0; m->v[3 * top + 2] = (float)R;
-    m->v[3 * bot] = 0; m->v[3 * bot + 1] = 0; m->v[3 * bot + 2] = (float)-R;
-    for (int i = 0; i < nu; i++) {
-      uint32_t a = (uint32_t)i, b = (uint32_t)((i + 1) % nu);
-      uint32_t *q = m->t + 3 * t++;
-      q[0] = top; q[1] = a; q[2] = b;
-      for (int j = 1; j + 1 < nv; j++) {
-        uint32_t p0 = (uint32_t)((j - 1) * nu + i), p1 = (uint32_t)((j - 1) * nu + (i + 1) % nu);
-        uint32_t p2 = (uint32_t)(j * nu + (i + 1) % nu), p3 = (uint32_t)(j * nu + i);
-        q = m->t + 3 * t;
-        q[0] = p0; q[1] = p3; q[2] = p2; q[3] = p0; q[4] = p2; q[5] = p1;
-        t += 2;
-      }
-      q = m->t + 3 * t++;
-      q[0] = bot; q[1] = (uint32_t)((nv - 2) * nu + (i + 1) % nu); q[2] = (uint32_t)((nv - 2) * nu + i);
-    }
-  }
-  return m;
-}
-
-static void check_truth(const char *name, mgs_mesh *m, const int want[3]) {
-  const char *dir = mgs_test_tmpdir(name);
-  char path[512];
-  snprintf(path, sizeof path, "%s/mesh.ply", dir);
-  mgs_error err;
-  CHECK_OK(mgs_mesh_write(path, m, &err), &err);
-  exp_truth t;
-  CHECK_OK(exp_truth_build(path, 64, dir, &t, &err), &err);
-  CHECK_MSG(t.betti_persistent[0] == want[0] && t.betti_persistent[1] == want[1] && t.betti_persistent[2] == want[2],
-            "%s: persistent Betti (%d, %d, %d), want (%d, %d, %d)", name, t.betti_persistent[0], t.betti_persistent[1],
-            t.betti_persistent[2], want[0], want[1], want[2]);
-  CHECK(t.voxel > 0 && t.band >= 3 && t.half_width >= t.pers_threshold);
-  snprintf(path, sizeof path, "%s/gt_diagram.json", dir);
-  CHECK(mgs_path_exists(path));
-  exp_truth_free(&t);
-  /* no mesh: nothing measured, not an error */
-  CHECK_OK(exp_truth_build(NULL, 64, NULL, &t, &err), &err);
-  CHECK(t.diagram == NULL && t.betti[0] == -1);
-  exp_truth_free(&t);
-}
-
-static void test_truth_topology(void) {
-  mgs_mesh *s = make_mesh(1.0, 0, 48, 24), *t = make_mesh(1.0, 0.4, 64, 32);
-  const int ws[3] = {1, 0, 0}, wt[3] = {1, 1, 0};
-  check_truth("exp_sphere", s, ws);
-  check_truth("exp_torus", t, wt);
-  mgs_mesh_destroy(s);
-  mgs_mesh_destroy(t);
-  /* Betti numbers at level 0 from a hand-made diagram */
-  mgs_diagram *d = mgs_diagram_create();
-  mgs_pair p;
-  memset(&p, 0, sizeof p);
-  mgs_error err;
-  p.dim = 0; p.birth = -0.5; p.death = INFINITY; mgs_diagram_push(d, &p, &err);
-  p.dim = 1; p.birth = -0.01; p.death = 0.02; mgs_diagram_push(d, &p, &err);  /* short tunnel */
-  p.dim = 1; p.birth = -0.3; p.death = 0.4; mgs_diagram_push(d, &p, &err);   /* long tunnel */
-  p.dim = 2; p.birth = 0.1; p.death = 0.3; mgs_diagram_push(d, &p, &err);    /* born after 0 */
-  p.dim = 0; p.birth = -0.2; p.death = 0.0; mgs_diagram_push(d, &p, &err);   /* dies at 0 */
-  int all[3], per[3];
-  exp_betti_at_zero(d, 0.1, all, per);
-  CHECK(all[0] == 1 && all[1] == 2 && all[2] == 0);
-  CHECK(per[0] == 1 && per[1] == 1 && per[2] == 0);
-  mgs_diagram_destroy(d);
+static double num(cJSON *o, const char *k) {
+  cJSON *x = cJSON_GetObjectItem(o, k);
+  return cJSON_IsNumber(x) ? x->valuedouble : NAN;
 }
 
 int main(void) {
-  RUN(test_verdict_rules);
-  RUN(test_run_record);
-  RUN(test_report);
-  RUN(test_truth_topology);
-  mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
+  const char *cli = getenv("MGS_CLI");
+  if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 2; }
+  const char *dir = mgs_test_tmpdir("exp_report");
+  char from[512], out[512], path[600];
+  snprintf(from, sizeof from, "%s/earlier", dir);
+  snprintf(out, sizeof out, "%s/again", dir);
+  mgs_error err;
+  CHECK_OK(mgs_mkdir_p(from, &err), &err);
+  snprintf(path, sizeof path, "%s/curves.csv", from);
+  FILE *f = fopen(path, "w");
+  CHECK(f != NULL);
+  if (!f) return mgs_test_finish();
+  fputs(HEADER, f);
+  /* baseline: 3 seeds; its sweep (every seed) puts (1000, 24 dB), (2000, 25), (4000, 26) on its front */
+  run(f, "baseline", 0, 1.0, 25.00, 2000, 0.0100, 100);
+  run(f, "baseline", 1, 1.0, 25.02, 2010, 0.0101, 104);
+  run(f, "baseline", 2, 1.0, 24.98, 1990, 0.0099, 96);
+  for (int s = 0; s < 3; s++) {
+    run(f, "baseline", s, 4.0, 24.00 + 0.01 * s, 1000 + 5 * s, 0.012, 50);
+    run(f, "baseline", s, 0.25, 26.00 + 0.01 * s, 4000 + 10 * s, 0.009, 200);
+    run(f, "baseline", s, 2.0, 23.50, 3000, 0.012, 50); /* the knob's curve runs the wrong way here: dominated */
+  }
+  /* "good": Chamfer -50 %, floaters 5 (-94 % on count + 1), ~1414 Gaussians at 25.6 dB
+     (the front needs 2000 * 2^0.6 = 3031 there: -53 %), +0.6 dB */
+  run(f, "good", 0, 1.0, 25.61, 1414.2, 0.0050, 5);
+  run(f, "good", 1, 1.0, 25.62, 1420, 0.0051, 5);
+  run(f, "good", 2, 1.0, 25.57, 1410, 0.0049, 5);
+  /* "bad": Chamfer +20 %, PSNR -1 dB; seed 2 at 23.4 dB is below the front's range */
+  run(f, "bad", 0, 1.0, 24.0, 2000, 0.0120, 100);
+  run(f, "bad", 1, 1.0, 24.03, 2000, 0.0122, 104);
+  run(f, "bad", 2, 1.0, 23.4, 2000, 0.0119, 96);
+  /* "single": one seed only; "nochamfer": no Chamfer measured */
+  run(f, "single", 0, 1.0, 25.5, 1000, 0.005, 5);
+  run(f, "nochamfer", 0, 1.0, 25.0, 2000, NAN, 100);
+  run(f, "nochamfer", 1, 1.0, 25.0, 2000, NAN, 100);
+  run(f, "nochamfer", 2, 1.0, 25.0, 2000, NAN, 100);
+  fclose(f);
+  static const char results[] =
+    "{\"format\":\"morsegs-experiment-results\",\"command\":\"morsegs experiment toy -o earlier\",\"written\":\"then\","
+    "\"iterations\":100,\"seeds\":3,\"definitions\":{\"topology_voxels_per_gt_diagonal\":256,\"knobs\":\"baseline: "
+    "--grad-threshold 0.0002 x {1, 4, 0.25, 2}\"},\"variants\":[{\"name\":\"baseline\",\"status\":\"available\"},"
+    "{\"name\":\"good\",\"status\":\"available\"},{\"name\":\"bad\",\"status\":\"available\"},{\"name\":\"single\","
+    "\"status\":\"available\"},{\"name\":\"nochamfer\",\"status\":\"available\"},{\"name\":\"missing\",\"status\":\"not available\","
+    "\"reason\":\"morsegs train: --nope: unknown\"}],\"datasets\":[{\"name\":\"toy\",\"gt_mesh\":\"\",\"variants\":["
+    "{\"name\":\"bad\",\"hypotheses\":{\"H3\":{\"verdict\":\"yes\"}}}]}]}";
+  snprintf(path, sizeof path, "%s/RESULTS.json", from);
+  CHECK_OK(mgs_write_file_atomic(path, results, strlen(results), &err), &err);
+  /* the folder it reads from is refused as the output (the earlier report is kept) */
+  CHECK(mgs_test_sh("%s experiment --report-from %s -o %s > /dev/null 2>&1", cli, from, from) == 2);
+  CHECK(mgs_test_sh("%s experiment --report-from %s -o %s some/data > /dev/null 2>&1", cli, from, out) == 2);
+  CHECK(mgs_test_sh("%s experiment --report-from %s -o %s", cli, from, out) == 0);
+
+  char *text = NULL;
+  size_t len;
+  snprintf(path, sizeof path, "%s/RESULTS.json", out);
+  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
+  cJSON *root = text ? cJSON_Parse(text) : NULL;
+  CHECK(root != NULL);
+  if (!root) return mgs_test_finish();
+  cJSON *h;
+  h = hyp(root, "good", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "yes") && !strcmp(str(h, "verdict_holm"), "yes"));
+  CHECK(h && fabs(num(h, "change_mean") - log(0.5)) < 0.01 && fabs(num(h, "shown_mean") + 50) < 1);
+  CHECK(h && num(h, "ci95_lo") < num(h, "change_mean") && num(h, "ci95_hi") > num(h, "change_mean"));
+  CHECK(h && num(h, "ci95_hi") < log(0.7) && num(h, "seeds") == 3 && num(h, "p") < 0.01);
+  CHECK(h && num(h, "holm_ci_lo") < num(h, "ci95_lo") && num(h, "p_holm") >= num(h, "p"));
+  h = hyp(root, "good", "H2");
+  CHECK(h && !strcmp(str(h, "verdict"), "yes")); /* (5 + 1) / (100 + 1): -94 % */
+  h = hyp(root, "good", "H3");
+  CHECK(h && !strcmp(str(h, "verdict"), "yes") && num(h, "seeds_inside_front") == 3 && num(h, "front_points") == 9); /* x2 dominated */
+  /* per seed: log(count / (2000 * 2^((psnr - 25) / 1))) along the front (the x1 seeds are on it too) */
+  CHECK(h && fabs(num(h, "shown_mean") - 100 * (1414.2 / (2000 * pow(2, 0.6)) - 1)) < 3);
+  h = hyp(root, "good", "H4");
+  CHECK(h && !strcmp(str(h, "verdict"), "yes") && fabs(num(h, "change_mean") - 0.6) < 1e-6);
+  h = hyp(root, "good", "H4_ssim"); /* SSIM equal in every run */
+  CHECK(h && !strcmp(str(h, "verdict"), "no") && !strcmp(str(h, "verdict_holm"), "no"));
+  h = hyp(root, "bad", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "worse"));
+  h = hyp(root, "bad", "H4");
+  CHECK(h && !strcmp(str(h, "verdict"), "worse"));
+  h = hyp(root, "bad", "H3"); /* 23.4 dB is below the front: counted, not silently dropped */
+  CHECK(h && num(h, "seeds") == 2 && num(h, "seeds_below_front") == 1 && strstr(str(h, "note"), "outside the front"));
+  h = hyp(root, "single", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "n/a") && num(h, "seeds") == 1 && strstr(str(h, "note"), "1 seed"));
+  h = hyp(root, "nochamfer", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "n/a") && num(h, "seeds") == 0 && strstr(str(h, "note"), "without a measurement"));
+  h = hyp(root, "baseline", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "reference"));
+  cJSON *counts = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "verdict_counts"), "H1");
+  CHECK(counts && num(cJSON_GetObjectItem(counts, "raw"), "yes") == 1 && num(cJSON_GetObjectItem(counts, "raw"), "worse") == 1);
+  cJSON_Delete(root);
+  free(text);
+  /* RESULTS.md: intervals beside the words, the front, the comparison with the earlier words */
+  snprintf(path, sizeof path, "%s/RESULTS.md", out);
+  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
+  CHECK(text && strstr(text, "| toy | good | 3 | -50.0 % ["));
+  CHECK(text && strstr(text, "Pareto front (what H3 compares with"));
+  CHECK(text && strstr(text, "## Verdicts against the earlier report"));
+  CHECK(text && strstr(text, "| missing | not available |"));
+  free(text);
+  static const char *files[] = {"curves.csv", "h3.csv", "plots/toy_psnr_time.png", "plots/toy_psnr_time.svg",
+                                "plots/toy_chamfer_time.png", "plots/toy_chamfer_time.svg", "plots/toy_h3_count_psnr.png"};
+  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+    snprintf(path, sizeof path, "%s/%s", out, files[i]);
+    CHECK_MSG(mgs_path_exists(path), "%s missing", path);
+  }
+  /* the curves CSV written again holds every evaluation point of every run */
+  snprintf(path, sizeof path, "%s/curves.csv", out);
+  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
+  int lines = 0;
+  for (char *q = text; q && *q; q++) lines += *q == '\n';
+  CHECK_MSG(lines == 1 + n_points, "%d lines, want %d", lines, 1 + n_points);
+  free(text);
   return mgs_test_finish();
 }

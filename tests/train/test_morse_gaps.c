@@ -251,11 +251,47 @@ static void far_outliers(void) {
   mgs_gaussians_destroy(g);
 }
 
+/* The H3 knob of MorseGS-D (`morsegs experiment` sweeps it): the gaps rule spawns only at
+ * holes of radius <= gap_max x diagonal, so gap_max at x0.5 and x2 of its default must spawn
+ * differently on a plate with one hole (ρ in {A = τ} ≈ 0.12, diagonal ≈ 2.8: the hole is
+ * beyond 0.025 x 2.8 = 0.07 and within 0.1 x 2.8 = 0.28). eps_p, which the experiment swept
+ * before, is read by the literal rules only: the gaps rule's count does not move with it. */
+static void gap_max_is_the_spawn_knob(void) {
+  mgs_morse_options d;
+  mgs_morse_options_default(&d);
+  const double factor[3] = {0.5, 1, 2};
+  size_t spawned[3], spawned_eps[2];
+  for (int k = 0; k < 5; k++) {
+    mgs_gaussians *g = mgs_gaussians_create(1024, 0);
+    flat_plate(g, 2.0, 0.05, 0.2);
+    mgs_morse_options o = d;
+    o.spawn = MGS_MORSE_SPAWN_GAPS;
+    o.resolution = 96;
+    if (k < 3) o.gap_max = d.gap_max * factor[k];
+    else o.eps_p = d.eps_p * (k == 3 ? 0.5 : 2);
+    mgs_morse_ctx *c = NULL;
+    mgs_error err;
+    size_t n = 0;
+    CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c, &err), &err);
+    CHECK_OK(mgs_morse_analyze(c, g, 1, &err), &err);
+    CHECK_OK(mgs_morse_spawn_apply(c, g, NULL, &n, &err), &err);
+    if (k < 3) spawned[k] = n; else spawned_eps[k - 3] = n;
+    mgs_morse_ctx_unref(c);
+    mgs_gaussians_destroy(g);
+  }
+  fprintf(stderr, "  gaps rule on a holed plate: gap_max x0.5 -> %zu spawned, x1 -> %zu, x2 -> %zu; eps_p x0.5 -> %zu, x2 -> %zu\n",
+          spawned[0], spawned[1], spawned[2], spawned_eps[0], spawned_eps[1]);
+  CHECK(spawned[0] != spawned[2]);
+  CHECK(spawned[0] == 0 && spawned[2] == 1 && spawned[1] == 1);
+  CHECK(spawned_eps[0] == spawned_eps[1] && spawned_eps[0] == spawned[1]);
+}
+
 int main(void) {
   RUN(far_outliers);
   RUN(holed_shell);
   RUN(plate_hole);
   RUN(thin_tube);
   RUN(floater);
+  RUN(gap_max_is_the_spawn_knob);
   return mgs_test_finish();
 }

@@ -1,4 +1,4 @@
-/* What `morsegs experiment` records at each evaluation point of a run (apps/mgs_experiment.h):
+/* What `morsegs experiment` records at each evaluation point of a run (measure/mgs_measure.h):
  *   - the figures of `morsegs eval RUN --iteration N` (PSNR, SSIM, Gaussian count, Chamfer,
  *     F-score, H2 floaters), read back from the results.json that eval wrote, so the report
  *     shows exactly what eval reports;
@@ -16,7 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "apps/mgs_experiment.h"
+#include "measure/mgs_measure.h"
 #include "core/mgs_core.h"
 #include "render/mgs_mesh_distance.h"
 #include "topo/mgs_diagram_tools.h"

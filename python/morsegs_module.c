@@ -180,7 +180,7 @@ static PyObject *py_vdb(PyObject *self, PyObject *args, PyObject *kw) {
   const char *path, *grid = NULL;
   int construction = 0, filtration = -1, check = 1;
   double band = NAN;
-  if (!PyArg_ParseTupleAndKeywords(args, kw, "s|zidp:vdb_persistence", kwlist, &path, &grid, &construction,
+  if (!PyArg_ParseTupleAndKeywords(args, kw, "s|ziidp:vdb_persistence", kwlist, &path, &grid, &construction,
                                    &filtration, &band, &check))
     return NULL;
   if (construction != MGS_TOPO_V && construction != MGS_TOPO_T) {

@@ -182,5 +182,25 @@ def test_2d_persistence_shape():
     assert m.persistence_intervals_in_dimension(7).shape == (0, 2)
 
 
+def test_sklearn_transformer():
+    """morsegs.sklearn.CubicalPersistence == GUDHI's diagrams, serial and threaded."""
+    from morsegs.sklearn import CubicalPersistence
+    rng = np.random.default_rng(12)
+    X = [random_field(rng, (10, 11)) for _ in range(6)]
+    for jobs in (None, 2):
+        out = CubicalPersistence(homology_dimensions=[0, 1], n_jobs=jobs).fit_transform(X)
+        one = CubicalPersistence(homology_dimensions=1, n_jobs=jobs).fit_transform(X)
+        for x, (d0, d1), e1 in zip(X, out, one):
+            g = gudhi.CubicalComplex(top_dimensional_cells=x)
+            g.compute_persistence(homology_coeff_field=2)
+            assert sorted(map(tuple, d0)) == sorted(map(tuple, g.persistence_intervals_in_dimension(0)))
+            assert sorted(map(tuple, d1)) == sorted(map(tuple, g.persistence_intervals_in_dimension(1)))
+            assert np.array_equal(d1, e1)
+    flat = CubicalPersistence(homology_dimensions=0, newshape=(10, 11)).fit_transform([x.ravel() for x in X])
+    assert all(np.array_equal(a, b[0]) for a, b in zip(flat, out))
+    assert CubicalPersistence(0).set_params(min_persistence=0.5).get_params()["min_persistence"] == 0.5
+    pyt.raises(ValueError, CubicalPersistence(0, input_type="cubes").fit, X)
+
+
 if __name__ == "__main__":
     pyt.run(globals())

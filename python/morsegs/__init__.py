@@ -390,6 +390,6 @@ def wasserstein_distance(X, Y, matching=False, order=1.0, internal_p=np.inf, kee
         b = np.ascontiguousarray(b[np.isfinite(b).all(axis=1)])
     d, bound = _morsegs.diagram_distance(a, b, float(order), float(internal_p))
     if bound > 0:
-        warnings.warn("wasserstein_distance: approximated (more than %d points); |error| <= %g" % (2000, bound),
+        warnings.warn("wasserstein_distance: approximated (more than %d points in the two diagrams); |error| <= %g" % (2000, bound),
                       RuntimeWarning, stacklevel=2)
     return d

@@ -8,6 +8,7 @@ PKGS=(
   libopenimageio-dev openimageio-tools libembree-dev libtbb-dev
   libassimp-dev libcjson-dev libcairo2-dev libqhull-dev
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
+  python3-dev python3-venv python3-setuptools python3-wheel
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
   netgen-doc

@@ -121,7 +121,7 @@ static void validation(void) {
   const char *data;
   mgs_error err;
   CHECK_OK(parse(&c, "DATA -o RUN --morse-every 100", &data, &err), &err);
-  CHECK(mgs_config_validate(&c, 1, &err) == MGS_ERR_ARG && strstr(err.msg, "--morse-every"));
+  CHECK_OK(mgs_config_validate(&c, 1, &err), &err); /* read by nothing: a warning */
   CHECK_OK(parse(&c, "DATA -o RUN --spawn gaps", &data, &err), &err);
   CHECK(mgs_config_validate(&c, 1, &err) == MGS_ERR_ARG && strstr(err.msg, "--strategy morse"));
   CHECK_OK(parse(&c, "DATA -o RUN --preset morse-d --iters 1000", &data, &err), &err);

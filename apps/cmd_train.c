@@ -453,9 +453,10 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
   } else if (!strcmp(init, "lpvi")) {
     st = mgs_topogs_init_model(&g_topogs, ds, o.sh_degree, seed, random_points, &g0, &err);
   } else if (!strcmp(init, "levelset")) { /* MorseGS level-set init (train/mgs_init_levelset.h) */
-    if (!ds->init_points || ds->init_points->n == 0) {
-      st = mgs_error_set(&err, MGS_ERR_ARG, "--init levelset: %s has no initial points (COLMAP points3D, points3d.ply)", data);
-    } else {
+    mgs_view_points_options vo; /* no point file: surface points from the train views (train/init_hull.c) */
+    mgs_view_points_options_default(&vo);
+    vo.seed = seed, vo.image_cache_mb = o.image_cache_mb;
+    if (!(st = mgs_init_dataset_points(ds, &vo, &err))) {
       mgs_levelset_options lo;
       mgs_levelset_options_default(&lo);
       lo.seed = seed;

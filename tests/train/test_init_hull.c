@@ -17,6 +17,7 @@
 #include "mgs_test.h"
 #include "render/mgs_mesh_distance.h"
 #include "train/mgs_init_levelset.h"
+#include "train/mgs_train.h"
 
 static const char *cli(void) { return getenv("MGS_CLI") ? getenv("MGS_CLI") : "../../apps/morsegs"; }
 
@@ -174,6 +175,16 @@ static void test_warmup(void) {
     CHECK_MSG(s.p95 < 6, "warm-up points far from the surface: p95 %.3f px", s.p95);
   }
   free(xyz), free(rgb);
+  /* for comparison (docs/notes-morse.md): the reference's random points, the other input
+     available without alpha */
+  mgs_gaussians *rnd = NULL;
+  CHECK_OK(mgs_init_random_for_dataset(ds, 100000, 0, 0, &rnd, &err), &err);
+  if (rnd) {
+    dist_stats s = measure(rnd->mean, rnd->n, pixel_footprint(ds));
+    fprintf(stderr, "  random init: %zu points; to GT in pixel footprints: mean %.3f, p95 %.3f, max %.3f\n", rnd->n, s.mean,
+            s.p95, s.max);
+  }
+  mgs_gaussians_destroy(rnd);
   mgs_dataset_destroy(ds);
 }
 

@@ -177,7 +177,7 @@ mgs_status mgs_vdb_sdf_from_alpha(const mgs_vdb_grid *alpha, const mgs_vdb_sdf_p
 /* Incremental SDF (CLOSEST and SWEEP; MESH and empty fields are built whole): the cache
  * keeps the last build's α-field (shared, so it must not be changed afterwards) and band.
  * On the same lattice, τ and band, the leaves where the new α-field differs from the cached
- * one, grown by the distance over which an SDF value depends on α (2w + 8 voxels), are
+ * one, grown by the distance over which an SDF value depends on α (2w + 10 voxels), are
  * computed again from a crop of the field with the same margin once more; every other leaf
  * is copied. The grid equals mgs_vdb_sdf_from_alpha's voxel for voxel
  * (tests/vdb/test_vdb_sdf_cache). When the region to redo is over half the grid, the whole

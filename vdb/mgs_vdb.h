@@ -150,7 +150,8 @@ typedef enum mgs_vdb_sdf_method {
   MGS_VDB_SDF_SWEEP = 1,
   /* Default. Closest points on {A = τ} (Chopp's iteration on the triquadratic interpolant)
    * at the voxels next to the interface, carried ring by ring through the band and refined,
-   * then relaxed until neighbours' distances differ by at most their spacing (a valid
+   * then relaxed until neighbours' distances differ by at most their spacing, and grown
+   * where a band voxel lies nearer than w − 1 to a surface part no seed sees (a valid
    * narrow band on trained models too: tests/vdb/test_vdb_band):
    * 0.016 / 0.041 voxel on the sphere / ellipsoid (tests/vdb/test_vdb_field),
    * bench/RESULTS-vdb.md for the cost. */

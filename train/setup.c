@@ -53,9 +53,13 @@ static mgs_status init_lpvi(const mgs_train_config *c, const mgs_dataset *ds, mg
   return st;
 }
 
-static mgs_status init_levelset(const mgs_train_config *c, const mgs_dataset *ds, mgs_gaussians **out, mgs_error *err) {
-  if (!ds->init_points || ds->init_points->n == 0)
-    return mgs_error_set(err, MGS_ERR_ARG, "--init levelset: %s has no initial points (COLMAP points3D, points3d.ply)", ds->root);
+static mgs_status init_levelset(const mgs_train_config *c, mgs_dataset *ds, mgs_gaussians **out, mgs_error *err) {
+  mgs_view_points_options vo; /* no point file: surface points from the train views (train/init_hull.c) */
+  mgs_view_points_options_default(&vo);
+  vo.seed = c->seed;
+  vo.image_cache_mb = (size_t)c->image_cache_mb;
+  mgs_status st0 = mgs_init_dataset_points(ds, &vo, err);
+  if (st0) return st0;
   mgs_levelset_options lo;
   mgs_levelset_options_default(&lo);
   lo.seed = c->seed;
@@ -66,7 +70,7 @@ static mgs_status init_levelset(const mgs_train_config *c, const mgs_dataset *ds
   return st;
 }
 
-static mgs_status initial_model(const mgs_train_config *c, const mgs_dataset *ds, int for_resume, mgs_gaussians **g0,
+static mgs_status initial_model(const mgs_train_config *c, mgs_dataset *ds, int for_resume, mgs_gaussians **g0,
                                 char *used, mgs_error *err) {
   snprintf(used, 16, "%s", mgs_config_enum_name(c, "init"));
   if (for_resume) { /* replaced by the checkpoint */

@@ -150,7 +150,8 @@ typedef enum mgs_vdb_sdf_method {
   MGS_VDB_SDF_SWEEP = 1,
   /* Default. Closest points on {A = τ} (Chopp's iteration on the triquadratic interpolant)
    * at the voxels next to the interface, carried ring by ring through the band and refined,
-   * then relaxed until neighbours' distances differ by at most their spacing (a valid
+   * then relaxed until neighbours' distances differ by at most their spacing, and grown
+   * where a band voxel lies nearer than w − 1 to a surface part no seed sees (a valid
    * narrow band on trained models too: tests/vdb/test_vdb_band):
    * 0.016 / 0.041 voxel on the sphere / ellipsoid (tests/vdb/test_vdb_field),
    * bench/RESULTS-vdb.md for the cost. */
@@ -177,7 +178,7 @@ mgs_status mgs_vdb_sdf_from_alpha(const mgs_vdb_grid *alpha, const mgs_vdb_sdf_p
 /* Incremental SDF (CLOSEST and SWEEP; MESH and empty fields are built whole): the cache
  * keeps the last build's α-field (shared, so it must not be changed afterwards) and band.
  * On the same lattice, τ and band, the leaves where the new α-field differs from the cached
- * one, grown by the distance over which an SDF value depends on α (2w + 8 voxels), are
+ * one, grown by the distance over which an SDF value depends on α (2w + 10 voxels), are
  * computed again from a crop of the field with the same margin once more; every other leaf
  * is copied. The grid equals mgs_vdb_sdf_from_alpha's voxel for voxel
  * (tests/vdb/test_vdb_sdf_cache). When the region to redo is over half the grid, the whole

@@ -40,7 +40,9 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
+#include <algorithm>
 #include <atomic>
+#include <mutex>
 #include <cstring>
 #include <cmath>
 #include <limits>
@@ -492,10 +494,12 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   // the clean shapes' band errors: ellipsoid 0.046 -> 0.091 voxel). After the first sweep
   // only the voxels next to a change are visited; each change lowers a distance, so the
   // sweeps end.
-  size_t sweeps = 0, moved = 0;
-  std::unique_ptr<MaskTree> work(new MaskTree(band));
+  size_t sweeps = 0, moved = 0, grown = 0;
   const double eps = 1e-4;  // voxels: float rounding of the stored points
   const double lsteps[4] = {0, 1, std::sqrt(2.0), std::sqrt(3.0)};
+  // Sweeps over `work` (a mask inside the band) until nothing changes; every voxel that
+  // changed is added to `touched`.
+  auto relax = [&](std::unique_ptr<MaskTree> work, MaskTree &touched) {
   while (work->activeVoxelCount() > 0) {
     sweeps++;
     Vec3STree next(*work, Vec3s(0.0f), TopologyCopy());
@@ -556,9 +560,96 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
       }
     });
     moved += changed.activeVoxelCount();
+    touched.topologyUnion(changed);
     work.reset(new MaskTree(changed));
     tools::dilateActiveValues(*work, 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
     work->topologyIntersection(band);
+  }
+  };
+  MaskTree touched(false);
+  relax(std::unique_ptr<MaskTree>(new MaskTree(band)), touched);
+  // The band's outer layer. The band is the seeds grown by w voxels, but the surface also
+  // has parts no seed sees: sub-voxel bubbles and slivers of the interpolant between voxel
+  // centres of one sign, which the iteration finds. A voxel next to one can sit deep inside the
+  // seeds' band at |d| = 0.1 voxel with a neighbour left out at the background ±w
+  // (measured on a 7050-iteration model of gmsh-doc's lever.stl at 512: 48 such pairs,
+  // up to 2.9 voxels apart; issue 21). So grow the band: every voxel outside it beside a band
+  // voxel i with |d_i| + |x_i - x_j| < w joins, with the nearest of its neighbours' points
+  // (refined), and the relaxation runs again around it; repeat until none. Afterwards an
+  // active voxel beside an inactive one has |d| >= w - 1 voxel, so the background is within a
+  // voxel of it too. Each round adds only voxels nearer than w to a point, so it ends.
+  std::unique_ptr<MaskTree> scan(new MaskTree(band));
+  for (;;) {
+    std::mutex mu;
+    std::vector<Coord> add;
+    for_each_on(*scan, [&](const MaskTree::LeafNodeType &ml) {
+      tree::ValueAccessor<const Vec3STree> ca(cp);
+      tree::ValueAccessor<const MaskTree> ba(band);
+      std::vector<Coord> mine;
+      for (auto v = ml.getValueMask().beginOn(); v; ++v) {
+        const Coord c = ml.offsetToGlobalCoord(v.pos());
+        const double d = Vec3d(ca.getValue(c)).length();
+        if (!(d + 1 < w)) continue;  // (false for NaN)
+        for (int i = -1; i <= 1; i++)
+          for (int j = -1; j <= 1; j++)
+            for (int l = -1; l <= 1; l++) {
+              const Coord n = c.offsetBy(i, j, l);
+              if (!ba.isValueOn(n) && d + lsteps[(i != 0) + (j != 0) + (l != 0)] < w) mine.push_back(n);
+            }
+      }
+      if (!mine.empty()) {
+        std::lock_guard<std::mutex> lk(mu);
+        add.insert(add.end(), mine.begin(), mine.end());
+      }
+    });
+    if (add.empty()) break;
+    std::sort(add.begin(), add.end(), [](const Coord &a, const Coord &b) { return a < b; });
+    add.erase(std::unique(add.begin(), add.end()), add.end());
+    // points first (from the band as it was), then the topology: the reads see no new voxel
+    std::vector<Vec3s> off(add.size());
+    {
+      QuadField q(at, tau);
+      tree::ValueAccessor<const Vec3STree> ca(cp);
+      tree::ValueAccessor<const MaskTree> ba(band);
+      for (size_t k = 0; k < add.size(); k++) {
+        const Vec3d x = add[k].asVec3d();
+        double best = INFINITY;
+        Vec3d bp(0.0);
+        for (int i = -1; i <= 1; i++)
+          for (int j = -1; j <= 1; j++)
+            for (int l = -1; l <= 1; l++) {
+              const Coord n = add[k].offsetBy(i, j, l);
+              if (!ba.isValueOn(n)) continue;
+              const Vec3d p = n.asVec3d() + Vec3d(ca.getValue(n));
+              const double d2 = (p - x).lengthSqr();
+              if (d2 < best) best = d2, bp = p;
+            }
+        Vec3d p = bp;
+        if (closest_point(q, x, p, 3) && (p - x).lengthSqr() < best) bp = p;
+        off[k] = Vec3s(bp - x);
+      }
+    }
+    MaskTree added(false);
+    {
+      tree::ValueAccessor<const MaskTree> in(inside);
+      for (size_t k = 0; k < add.size(); k++) {
+        const double d = Vec3d(off[k]).length();
+        band.setValueOn(add[k]);
+        added.setValueOn(add[k]);
+        cp.setValueOn(add[k], off[k]);
+        dist.setValueOn(add[k], (float)(in.isValueOn(add[k]) ? -d : d));
+      }
+    }
+    grown += add.size();
+    // New band leaves: their other voxels hold the trees' backgrounds, inactive (the trim
+    // below signs them from the inside mask).
+    std::unique_ptr<MaskTree> work(new MaskTree(added));
+    tools::dilateActiveValues(*work, 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
+    work->topologyIntersection(band);
+    MaskTree again(false);
+    relax(std::move(work), again);
+    scan.reset(new MaskTree(added));
+    scan->topologyUnion(again);
   }
   const double t4 = mgs_now();
   cp.clear();
@@ -586,8 +677,8 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   });
   if (fallback) mgs_debug("sdf (closest): %zu seed voxels kept an edge crossing (no iteration converged)", (size_t)fallback);
   mgs_debug("sdf (closest): masks %.3f s, %zu seeds %.3f s, rings %.3f s, relaxation %.3f s (%zu sweeps, %zu voxels "
-            "moved), trim %.3f s (%zu band voxels)", t1 - t0, (size_t)seeds.activeVoxelCount(), t2 - t1, t3 - t2, t4 - t3,
-            sweeps, moved, mgs_now() - t4, (size_t)dist.activeVoxelCount());
+            "moved, %zu grown), trim %.3f s (%zu band voxels)", t1 - t0, (size_t)seeds.activeVoxelCount(), t2 - t1, t3 - t2,
+            t4 - t3, sweeps, moved, grown, mgs_now() - t4, (size_t)dist.activeVoxelCount());
   return dist_ptr;
 }
 
@@ -614,7 +705,7 @@ inline Coord leaf_key(const Coord &origin) { return Coord(origin[0] >> 3, origin
 // The raw band (CLOSEST's, or SWEEP's) of `alpha` from the last build's (prev_alpha -> prev_raw) on the same lattice:
 // the leaves where the two α-fields differ (D), grown by `reach` voxels (U), are computed
 // again from a crop of `alpha` grown by `reach` once more; every other leaf is copied. A
-// voxel's value depends on α within reach = 2w + 8 voxels: its closest point lies within w,
+// voxel's value depends on α within reach = 2w + 10 voxels: its closest point lies within w,
 // Chopp's iteration reads the 27 voxels around it, the rings hand points on one voxel at a
 // time, and a relaxation chain only moves a point to voxels within their own distance of it
 // (at most w), so w + w + a few; a sweep's value is the length of an upwind path from the
@@ -643,7 +734,9 @@ FloatTree::Ptr sdf_update(const FloatGrid &alpha, float tau, int w, bool sweep, 
     info.leaves_recomputed = 0;
     return std::make_shared<FloatTree>(prev_raw);
   }
-  const int reach = 2 * w + 8, grow = (reach + 7) / 8;  // in leaves
+  // (+2: a voxel the band grows by takes a neighbour's point, one voxel further; w = 3 still
+  // gives 2 leaves)
+  const int reach = 2 * w + 10, grow = (reach + 7) / 8;  // in leaves
   MaskTree redo(changed);
   tools::dilateActiveValues(redo, grow, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
   redo.voxelizeActiveTiles();

@@ -554,6 +554,7 @@ static int mgs_cmd_train_run(const char *data, const char *run, mgs_train_option
     mgs_settings_set(&s, "freeze", o.freeze ? "True" : "False", 0);
     mgs_topogs_flags_record(&g_topogs, !strcmp(init_used, "lpvi"), &s);
     train_morse_flags_record(mf, strategy, &s); /* MorseGS settings */
+    mgs_run_record_origin(&s, ds); /* scene_origin: the frame the model trained in */
     char *cfg = mgs_path_join(run, "cfg_args");
     st = mgs_settings_write(cfg, &s, &err);
     free(cfg);

@@ -387,6 +387,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
     merged = mgs_gaussians_create(n_all ? n_all : 1, g->sh_degree);
     size_t first;
     if (!merged || mgs_gaussians_append(merged, n_all, &first, &err)) mgs_mpi_die(rank, "out of memory for the merged model");
+    memcpy(merged->origin, ds->origin, sizeof merged->origin); /* every rank's frame: the same load of the same folder */
     /* unpack rank by rank: each block is its ranks' rows, group by group */
     size_t row0 = 0;
     for (int r = 0; r < size; r++) {
@@ -416,6 +417,7 @@ static int train_blocks(const mpi_opts *mo, int rank, int size) {
       mgs_settings_seti(&s, "iterations", mo->iters);
       mgs_settings_seti(&s, "seed", (long long)mo->seed);
       mgs_settings_seti(&s, "mpi_ranks", size);
+      mgs_run_record_origin(&s, ds);
       char *cfg = mgs_path_join(mo->run, "cfg_args");
       st = mgs_settings_write(cfg, &s, &err);
       free(cfg);

@@ -63,6 +63,10 @@ mgs_vdb_class mgs_vdb_grid_class(const mgs_vdb_grid *g);
 void mgs_vdb_grid_set_class(mgs_vdb_grid *g, mgs_vdb_class cls);
 double mgs_vdb_grid_voxel_size(const mgs_vdb_grid *g);
 void mgs_vdb_grid_translation(const mgs_vdb_grid *g, double t[3]);
+/* Adds offset (world units, double) to the transform's translation; the voxels stay. Grids
+ * are built in a model's local float frame; this puts them at the model's origin
+ * (g->origin, core/mgs_origin.h) so a .vdb is in world coordinates. NULL or 0: no-op. */
+void mgs_vdb_grid_translate(mgs_vdb_grid *g, const double offset[3]);
 float mgs_vdb_grid_background(const mgs_vdb_grid *g);
 size_t mgs_vdb_grid_active_voxel_count(const mgs_vdb_grid *g);
 size_t mgs_vdb_grid_leaf_count(const mgs_vdb_grid *g);

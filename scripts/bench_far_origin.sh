@@ -19,7 +19,7 @@ done
 mkdir -p "$work"
 py=/usr/bin/python3
 base=$work/data-0
-[ -d "$base" ] || "$cli" scene --builtin genus2 -o "$base" --views "$views" --test-views 8 --width "$size" --height "$size" -q > /dev/null
+[ -d "$base" ] || "$cli" scene --builtin genus2 -o "$base" --views "$views" --test-views 8 --width "$size" --height "$size" --spp 4 -q > /dev/null
 rm -f "$base/gt_mesh.ply"
 "$py" "$here/translate_scene.py" "$base" "$work/data-0-np" 0 0 0 --no-points
 psnr() { "$py" -c "import json,sys; j=json.load(open(sys.argv[1])); print('%.3f' % list(j.values())[0]['PSNR'])" "$1/results.json"; }

@@ -277,6 +277,9 @@ mgs_status mgs_vdb_points_create_critical(size_t n, const float *xyz, const int3
                                           const float *persistence, double voxel_size,
                                           mgs_vdb_points **out, mgs_error *err);
 void mgs_vdb_points_destroy(mgs_vdb_points *p);
+/* Moves the point grid's transform by offset (double): positions given relative to a local
+ * origin (float) land at origin + position in the file (see mgs_vdb_grid_translate). */
+void mgs_vdb_points_translate(mgs_vdb_points *p, const double offset[3]);
 size_t mgs_vdb_points_count(const mgs_vdb_points *p);
 /* Reads such a point grid back (name NULL = "critical"); arrays malloc'd (free()), in the
  * grid's spatial order (not the order written). Errors name a missing attribute. */

@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include "core/mgs_origin.h"
 #include "apps/mgs_cli.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
@@ -102,15 +103,23 @@ static mgs_status write_critical(const char *path, const mgs_diagram *d, double 
     st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for %zu points", path, n);
     goto done;
   }
+  double origin[3]; /* far grids: float positions relative to a local origin, the point grid moved back in double */
+  {
+    double c[3] = {0, 0, 0}, ss = 0;
+    for (size_t i = 0; i < n; i++) for (int k = 0; k < 3; k++) c[k] += d->pairs[i].b.pos[k] / (double)n;
+    for (size_t i = 0; i < n; i++) for (int k = 0; k < 3; k++) ss += (d->pairs[i].b.pos[k] - c[k]) * (d->pairs[i].b.pos[k] - c[k]);
+    mgs_origin_choose(c, n ? sqrt(ss / (double)n) : 1.0, origin);
+  }
   for (size_t i = 0; i < n; i++) {
     const mgs_pair *p = &d->pairs[i];
-    for (int k = 0; k < 3; k++) xyz[3 * i + k] = (float)p->b.pos[k];
+    for (int k = 0; k < 3; k++) xyz[3 * i + k] = (float)(p->b.pos[k] - origin[k]);
     index[i] = p->dim;
     birth[i] = (float)p->birth;
     death[i] = (float)p->death;
     pers[i] = (float)fabs(p->death - p->birth);
   }
   st = mgs_vdb_points_create_critical(n, xyz, index, birth, death, pers, voxel_size, &pts, err);
+  if (st == MGS_OK) mgs_vdb_points_translate(pts, origin);
   if (st == MGS_OK) {
     mgs_vdb_file_meta meta;
     mgs_vdb_file_meta_default(&meta);

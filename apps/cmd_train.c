@@ -129,8 +129,8 @@ static int parse_saves(const char *list, int iterations, int *saves, int cap) {
 
 /* cfg_args: the reference's namespace keys (its viewers read source_path) and every
    recorded option of the table. */
-static mgs_status write_record(const mgs_train_config *c, const char *data, const char *run, const mgs_train_setup *su,
-                               mgs_error *err) {
+static mgs_status write_record(const mgs_train_config *c, const char *data, const char *run, const mgs_dataset *ds,
+                               const mgs_train_setup *su, mgs_error *err) {
   char abs_data[PATH_MAX];
   if (!realpath(data, abs_data)) snprintf(abs_data, sizeof abs_data, "%s", data);
   mgs_settings s;
@@ -145,6 +145,7 @@ static mgs_status write_record(const mgs_train_config *c, const char *data, cons
   mgs_settings_set(&s, "init_used", su->init_used, 1);
   mgs_settings_seti(&s, "threads", mgs_parallel_max_threads());
   mgs_config_record(c, &s);
+  mgs_run_record_origin(&s, ds); /* scene_origin: the frame the model trained in */
   char *cfg = mgs_path_join(run, "cfg_args");
   mgs_status st = cfg ? mgs_settings_write(cfg, &s, err) : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
   free(cfg);
@@ -209,7 +210,7 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
      at any moment can --resume */
   if (!c->resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
   /* settings record and cameras before training (a crash still leaves them) */
-  if ((st = write_record(c, data, run, &su, &err))) goto done;
+  if ((st = write_record(c, data, run, ds, &su, &err))) goto done;
   if ((st = mgs_run_write_cameras(run, ds, &err))) goto done;
 
   struct sigaction sa, old;

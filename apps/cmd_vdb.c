@@ -159,7 +159,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
   mgs_vdb_build_info info;
   int rc = 1;
   const double t0 = mgs_now();
-  if (mgs_ply_read_gaussians(in, &g, &err) != MGS_OK) goto done;
+  if (mgs_ply_read_gaussians_local(in, NULL, &g, &err) != MGS_OK) goto done; /* far models: a local frame, g->origin */
   if (mgs_vdb_check_gaussians(g, in, &err) != MGS_OK) goto done;
   if (mgs_vdb_alpha_field(g, &ap, &alpha, &info, &err) != MGS_OK) { name_input(&err, in); goto done; }
   mgs_info("alpha field: %zu Gaussians, voxel size %g, %zu active voxels (%.3g%% of the %.3g dense), %.2f s",
@@ -172,6 +172,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
   if (mgs_vdb_grid_active_voxel_count(sdf) == 0)
     mgs_warn("%s: no Gaussian region reaches tau = %g; the sdf grid is empty", in, sp.tau);
   if (mgs_vdb_density_from_alpha(alpha, &density, &err) != MGS_OK) goto done;
+  for (int k = 0; k < 2; k++) mgs_vdb_grid_translate(k ? sdf : density, g->origin); /* world coordinates */
   /* The mesh first, so a failure (e.g. no surface) leaves no output at all. */
   if (mesh_out && mgs_vdb_extract_mesh(sdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in); goto done; }
   mgs_vdb_grid_destroy(alpha);

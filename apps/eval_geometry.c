@@ -56,11 +56,12 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
   int rc = 1;
   const double t0 = mgs_now();
   if (table_out && table_len) table_out[0] = 0;
-  if (mgs_ply_read_gaussians(ply_path, &g, &err) != MGS_OK || mgs_vdb_check_gaussians(g, ply_path, &err) != MGS_OK ||
+  if (mgs_ply_read_gaussians_local(ply_path, NULL, &g, &err) != MGS_OK || mgs_vdb_check_gaussians(g, ply_path, &err) != MGS_OK ||
       mgs_mesh_read(gt_mesh_path, &gt, &err) != MGS_OK) {
     mgs_errorf("eval geometry: %s", err.msg);
     goto done;
   }
+  mgs_mesh_translate(gt, g->origin, -1); /* the GT mesh (world) into the model's local frame */
   double lo[3], hi[3];
   mgs_mesh_bounds(gt, lo, hi);
   const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));

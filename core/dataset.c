@@ -8,6 +8,7 @@
 #include "core/dataset_internal.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
+#include "core/mgs_origin.h"
 #include "core/mgs_parallel.h"
 
 void mgs_dataset_options_default(mgs_dataset_options *o) {
@@ -105,10 +106,12 @@ static mgs_dataset_format detect(const char *dir) {
   return MGS_DATASET_AUTO;
 }
 
+static mgs_split look_split(const mgs_dataset *d) { return d->n_views[MGS_SPLIT_TRAIN] ? MGS_SPLIT_TRAIN : MGS_SPLIT_TEST; }
+
 /* The reference's getNerfppNorm over the training cameras: centre of the camera centres,
  * radius 1.1 x the largest distance from it. */
 static void scene_norm(mgs_dataset *d) {
-  mgs_split s = d->n_views[MGS_SPLIT_TRAIN] ? MGS_SPLIT_TRAIN : MGS_SPLIT_TEST;
+  mgs_split s = look_split(d);
   size_t n = d->n_views[s];
   double c[3] = {0, 0, 0};
   for (size_t i = 0; i < n; i++) {
@@ -129,6 +132,83 @@ static void scene_norm(mgs_dataset *d) {
   /* One camera (or all at one spot) gives radius 0, which would zero the learning rates
      scaled by it: fall back to 1. */
   d->extent = r > 0 ? 1.1 * r : 1.0;
+}
+
+int mgs_dataset_look_at(const mgs_dataset *d, double p[3]) {
+  mgs_split s = look_split(d);
+  size_t n = d->n_views[s];
+  /* sum over the axes of (I - v v^T) p = (I - v v^T) c, v the viewing direction (OpenCV:
+     the camera looks down +z, the third column of c2w) */
+  double A[9] = {0}, b[3] = {0};
+  for (size_t i = 0; i < n; i++) {
+    const double *m = d->views[s][i].cam.c2w;
+    double v[3] = {m[2], m[6], m[10]}, c[3] = {m[3], m[7], m[11]};
+    double vn = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(vn > 0)) continue;
+    for (int k = 0; k < 3; k++) v[k] /= vn;
+    for (int r = 0; r < 3; r++)
+      for (int q = 0; q < 3; q++) {
+        double e = (r == q) - v[r] * v[q];
+        A[3 * r + q] += e;
+        b[r] += e * c[q];
+      }
+  }
+  double det = A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) + A[2] * (A[3] * A[7] - A[4] * A[6]);
+  double nn = (double)n;
+  memcpy(p, d->center, 3 * sizeof(double));
+  /* det of n(I - vv^T)-like sums is ~n^3 when the directions spread; parallel axes
+     (a forward-facing capture) have no common point */
+  if (n < 2 || !(fabs(det) > 1e-6 * nn * nn * nn)) return 0;
+  double q[3];
+  for (int k = 0; k < 3; k++) { /* Cramer's rule */
+    double M[9];
+    memcpy(M, A, sizeof M);
+    for (int r = 0; r < 3; r++) M[3 * r + k] = b[r];
+    q[k] = (M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) + M[2] * (M[3] * M[7] - M[4] * M[6])) / det;
+  }
+  size_t in_front = 0;
+  for (size_t i = 0; i < n; i++) {
+    const double *m = d->views[s][i].cam.c2w;
+    in_front += (q[0] - m[3]) * m[2] + (q[1] - m[7]) * m[6] + (q[2] - m[11]) * m[10] > 0;
+  }
+  if (2 * in_front <= n || !isfinite(q[0] + q[1] + q[2])) return 0;
+  memcpy(p, q, sizeof q);
+  return 1;
+}
+
+/* Chooses the scene origin (mgs_dataset.h) from the world-coordinate cameras and points,
+ * then moves both into the local frame: camera positions and point positions minus the
+ * origin in double, then rounded to float where they are float. A centred scene is left
+ * untouched. */
+static void place_origin(mgs_dataset *d) {
+  double c[3];
+  double lo[3], hi[3];
+  const mgs_point_cloud *pc = d->init_points;
+  if (pc && pc->n && mgs_points_bounds_robust(pc->xyz, pc->n, lo, hi))
+    for (int k = 0; k < 3; k++) c[k] = 0.5 * (lo[k] + hi[k]);
+  else
+    mgs_dataset_look_at(d, c);
+  mgs_origin_choose(c, d->extent, d->origin);
+  if (!mgs_origin_is_zero(d->origin)) {
+    for (int s = 0; s < MGS_SPLIT_COUNT; s++)
+      for (size_t i = 0; i < d->n_views[s]; i++) {
+        mgs_camera *cam = &d->views[s][i].cam;
+        double m[16];
+        memcpy(m, cam->c2w, sizeof m);
+        m[3] -= d->origin[0]; m[7] -= d->origin[1]; m[11] -= d->origin[2];
+        mgs_camera_set_c2w_opencv(cam, m);
+      }
+    if (pc && pc->xyz64)
+      for (size_t i = 0; i < pc->n; i++)
+        for (int k = 0; k < 3; k++) pc->xyz[3 * i + (size_t)k] = (float)(pc->xyz64[3 * i + (size_t)k] - d->origin[k]);
+    else if (pc)
+      for (size_t i = 0; i < pc->n; i++)
+        for (int k = 0; k < 3; k++) pc->xyz[3 * i + (size_t)k] = (float)((double)pc->xyz[3 * i + (size_t)k] - d->origin[k]);
+  }
+  if (d->init_points) { /* the local float positions are what the rest uses */
+    free(d->init_points->xyz64);
+    d->init_points->xyz64 = NULL;
+  }
 }
 
 typedef struct {
@@ -215,7 +295,11 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
         }
         mgs_camera_resize(&v->cam, w, h);
       }
-    if (st == MGS_OK) scene_norm(d);
+    if (st == MGS_OK) {
+      scene_norm(d); /* the extent (translation-free) that decides the origin */
+      place_origin(d);
+      if (!mgs_origin_is_zero(d->origin)) scene_norm(d); /* the centre in the local frame */
+    }
   }
   if (st == MGS_OK && o.load_images) st = load_all_images(d, err);
   if (st != MGS_OK) {

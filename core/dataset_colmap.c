@@ -151,8 +151,12 @@ static mgs_status read_points_bin(const char *path, mgs_point_cloud **out, mgs_e
   if (!rd(&c, &n, 8)) { free(buf); return TRUNC(path); }
   if (n > (size - 8) / 51) { free(buf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: point count %llu does not fit the file", path, (unsigned long long)n); }
   mgs_point_cloud *pc = calloc(1, sizeof *pc);
-  if (pc) { pc->xyz = malloc(sizeof(float) * 3 * ((size_t)n + 1)); pc->rgb = malloc(sizeof(float) * 3 * ((size_t)n + 1)); }
-  if (!pc || !pc->xyz || !pc->rgb) { free(buf); mgs_point_cloud_destroy(pc); return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); }
+  if (pc) {
+    pc->xyz = malloc(sizeof(float) * 3 * ((size_t)n + 1));
+    pc->rgb = malloc(sizeof(float) * 3 * ((size_t)n + 1));
+    pc->xyz64 = malloc(sizeof(double) * 3 * ((size_t)n + 1));
+  }
+  if (!pc || !pc->xyz || !pc->rgb || !pc->xyz64) { free(buf); mgs_point_cloud_destroy(pc); return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); }
   for (uint64_t i = 0; i < n && st == MGS_OK; i++) {
     uint64_t id, track;
     double xyz[3], e;
@@ -161,6 +165,7 @@ static mgs_status read_points_bin(const char *path, mgs_point_cloud **out, mgs_e
     for (int k = 0; k < 3; k++) {
       if (!isfinite(xyz[k]) || fabs(xyz[k]) > 1e30) { st = mgs_error_set(err, MGS_ERR_NUMERIC, "%s: point %llu has a non-finite position", path, (unsigned long long)id); break; }
       pc->xyz[i * 3 + (size_t)k] = (float)xyz[k];
+      pc->xyz64[i * 3 + (size_t)k] = xyz[k];
       pc->rgb[i * 3 + (size_t)k] = (float)rgb[k] / 255.0f;
     }
     pc->n = (size_t)i + 1;
@@ -331,10 +336,13 @@ static mgs_status read_points_txt(const char *path, mgs_point_cloud **out, mgs_e
       if (nx) pc->xyz = nx;
       float *nr = realloc(pc->rgb, cap * 3 * sizeof(float));
       if (nr) pc->rgb = nr;
-      if (!nx || !nr) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); break; }
+      double *n64 = realloc(pc->xyz64, cap * 3 * sizeof(double));
+      if (n64) pc->xyz64 = n64;
+      if (!nx || !nr || !n64) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); break; }
     }
     for (int k = 0; k < 3; k++) {
       pc->xyz[pc->n * 3 + (size_t)k] = (float)xyz[k];
+      pc->xyz64[pc->n * 3 + (size_t)k] = xyz[k];
       pc->rgb[pc->n * 3 + (size_t)k] = (float)rgb[k] / 255.0f;
     }
     pc->n++;
@@ -342,6 +350,7 @@ static mgs_status read_points_txt(const char *path, mgs_point_cloud **out, mgs_e
   free(L.text);
   if (st != MGS_OK) { mgs_point_cloud_destroy(pc); return st; }
   if (!pc->xyz) { pc->xyz = malloc(sizeof(float) * 3); pc->rgb = malloc(sizeof(float) * 3); }
+  if (!pc->xyz64) pc->xyz64 = malloc(sizeof(double) * 3);
   *out = pc;
   return MGS_OK;
 }

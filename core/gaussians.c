@@ -101,6 +101,7 @@ mgs_gaussians *mgs_gaussians_select(const mgs_gaussians *src, const size_t *idx,
     for (size_t i = 0; i < count; i++) memcpy(to + i * d, from + idx[i] * d, d * sizeof(float));
   }
   g->n = count;
+  for (int k = 0; k < 3; k++) g->origin[k] = src->origin[k];
   return g;
 }
 
@@ -111,6 +112,7 @@ mgs_gaussians *mgs_gaussians_clone(const mgs_gaussians *src) {
   for (int k = 0; k < MGS_PARAM_COUNT; k++)
     memcpy(*group_slot(g, (mgs_param_group)k), *group_slot(s, (mgs_param_group)k), src->n * (size_t)k_dims[k] * sizeof(float));
   g->n = src->n;
+  for (int k = 0; k < 3; k++) g->origin[k] = src->origin[k];
   return g;
 }
 

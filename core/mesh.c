@@ -155,3 +155,9 @@ size_t mgs_mesh_count_boundary_or_nonmanifold_edges(const mgs_mesh *m) {
   free(e);
   return bad;
 }
+
+void mgs_mesh_translate(mgs_mesh *m, const double offset[3], int sign) {
+  if (!m || (offset[0] == 0 && offset[1] == 0 && offset[2] == 0)) return;
+  for (size_t i = 0; i < m->nv; i++)
+    for (int k = 0; k < 3; k++) m->v[3 * i + (size_t)k] = (float)((double)m->v[3 * i + (size_t)k] + sign * offset[k]);
+}

@@ -57,6 +57,13 @@ typedef struct mgs_dataset {
      (1.1 x the largest distance to it) used for learning rates and densification. */
   double center[3];
   double extent;
+  /* The scene origin (core/mgs_origin.h): cameras, points and `center` above are relative
+     to it (shifted in double before anything became float); world = origin + local.
+     (0,0,0) for a centred scene. Chosen from the files alone, so every load of the same
+     folder (a resumed run, each MPI rank, render/eval) gets the same one: the centre of
+     the initial points' robust box, else the training cameras' look-at point
+     (mgs_dataset_look_at), against the cameras' extent. */
+  double origin[3];
 } mgs_dataset;
 
 void mgs_dataset_options_default(mgs_dataset_options *o);
@@ -67,6 +74,10 @@ void mgs_dataset_image_size(int full_w, int full_h, int downscale, int max_width
  * the image on mismatch). Safe to call concurrently for different views. */
 mgs_status mgs_dataset_load_image(mgs_dataset *d, mgs_view *v, mgs_error *err);
 void mgs_dataset_destroy(mgs_dataset *d);
+/* Where the training cameras look, in the dataset's frame: the point nearest (least
+ * squares) to all their optical axes. Returns 0 and the cameras' centre (`center`) when
+ * the axes are near parallel or the point lies behind most of the cameras. */
+int mgs_dataset_look_at(const mgs_dataset *d, double p[3]);
 const char *mgs_split_name(mgs_split s); /* "train", "val", "test" */
 
 #ifdef __cplusplus

@@ -2,7 +2,8 @@
  * (the layout optimizers and SIMD loops want), never an array of per-Gaussian structs.
  *
  * Parameters are stored in the reference 3DGS's *activation-free* form:
- *   mean      [n*3]  world position
+ *   mean      [n*3]  position relative to `origin` (float32 in a local frame; the
+ *                    world position is origin + mean, added in double: core/mgs_origin.h)
  *   log_scale [n*3]  log of the standard deviations along the local axes
  *   rot       [n*4]  quaternion (w, x, y, z), not necessarily normalized
  *   opacity   [n]    logit of α
@@ -44,6 +45,8 @@ typedef struct mgs_gaussians {
   size_t capacity; /* rows allocated in every group */
   int sh_degree;   /* 0..3: SH degree stored / active */
   float *mean, *log_scale, *rot, *opacity, *sh_dc, *sh_rest;
+  double origin[3]; /* world position of mean (0,0,0); (0,0,0) unless the scene is far
+                       from the world origin. Kept by select/clone; written by the .ply */
 } mgs_gaussians;
 
 /* Floats per Gaussian in each group: 3, 3, 4, 1, 3, 45. */

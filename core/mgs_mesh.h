@@ -30,6 +30,9 @@ mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err);
 /* Binary PLY, OBJ or OFF by extension; refuses non-finite vertices and bad indices. */
 mgs_status mgs_mesh_write(const char *path, const mgs_mesh *m, mgs_error *err);
 void mgs_mesh_bounds(const mgs_mesh *m, double lo[3], double hi[3]);
+/* v += sign * offset, in double (sign -1: world -> a local frame at origin `offset`,
+ * core/mgs_origin.h). A zero offset changes nothing. */
+void mgs_mesh_translate(mgs_mesh *m, const double offset[3], int sign);
 /* Translate/scale so the bounding box is centred at the origin and its largest side is
  * `size`; returns the scale applied, centre in `center_out` (may be NULL). */
 double mgs_mesh_normalize(mgs_mesh *m, double size, double center_out[3]);

@@ -18,15 +18,23 @@
 extern "C" {
 #endif
 
+/* Means as stored (world), origin (0,0,0). */
 mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err);
+/* Means relative to `origin` (subtracted in double before they become float; sets
+ * g->origin); origin NULL: chosen from the means (their mean against their RMS spread,
+ * core/mgs_origin.h: (0,0,0) for a centred model). */
+mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, mgs_gaussians **out, mgs_error *err);
 /* Writes the model at its sh_degree; refuses non-finite values (MGS_ERR_NUMERIC);
- * atomic (temp + rename). */
+ * atomic (temp + rename). A model with a non-zero origin is written in world coordinates
+ * with double x y z (origin + mean in double); otherwise the reference's all-float layout. */
 mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs_error *err);
 
 typedef struct mgs_point_cloud {
   size_t n;
-  float *xyz;  /* n*3 */
-  float *rgb;  /* n*3 in [0,1]; grey 0.5 when the file has no colours */
+  float *xyz;    /* n*3 */
+  float *rgb;    /* n*3 in [0,1]; grey 0.5 when the file has no colours */
+  double *xyz64; /* n*3: the positions as the file holds them (float or double), from
+                    which a dataset makes xyz relative to its origin; NULL after that */
 } mgs_point_cloud;
 
 void mgs_point_cloud_destroy(mgs_point_cloud *pc);

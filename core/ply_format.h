@@ -62,4 +62,9 @@ static inline void ply_put_f32le(unsigned char *buf, float v) {
   buf[0] = (unsigned char)u; buf[1] = (unsigned char)(u >> 8);
   buf[2] = (unsigned char)(u >> 16); buf[3] = (unsigned char)(u >> 24);
 }
+/* Writes a 64-bit double in little-endian order into buf. */
+static inline void ply_put_f64le(unsigned char *buf, double v) {
+  uint64_t u; __builtin_memcpy(&u, &v, 8);
+  for (int k = 0; k < 8; k++) buf[k] = (unsigned char)(u >> (8 * k));
+}
 #endif

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/mgs_fs.h"
+#include "core/mgs_origin.h"
 #include "core/mgs_ply.h"
 #include "core/ply_format.h"
 
@@ -23,6 +24,7 @@ typedef struct {
   int col_rest[MGS_SH_REST_MAX];
   int n_rest, degree, rest_per_channel;
   mgs_gaussians *g;
+  double *xyz64; /* the means as stored (world, double), placed in the local frame after reading */
 } gread;
 
 static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *err) {
@@ -30,8 +32,9 @@ static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *er
   if (row == 0) {
     /* Allocated only now: the container has checked the count against the file size. */
     r->g = mgs_gaussians_create(r->el->count, r->degree);
+    r->xyz64 = malloc(r->el->count * 3 * sizeof(double));
     size_t first = 0;
-    if (!r->g || mgs_gaussians_append(r->g, r->el->count, &first, err) != MGS_OK)
+    if (!r->g || !r->xyz64 || mgs_gaussians_append(r->g, r->el->count, &first, err) != MGS_OK)
       return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for %zu Gaussians", r->path, r->el->count);
   }
   mgs_gaussians *g = r->g;
@@ -42,9 +45,7 @@ static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *er
       return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite (%g)", r->path, row,
                            fixed_names[k], v[r->col_fixed[k]]);
   }
-  g->mean[row * 3 + 0] = f[G_X];
-  g->mean[row * 3 + 1] = f[G_Y];
-  g->mean[row * 3 + 2] = f[G_Z];
+  for (int k = 0; k < 3; k++) r->xyz64[row * 3 + (size_t)k] = v[r->col_fixed[G_X + k]];
   g->sh_dc[row * 3 + 0] = f[G_DC0];
   g->sh_dc[row * 3 + 1] = f[G_DC1];
   g->sh_dc[row * 3 + 2] = f[G_DC2];
@@ -67,7 +68,24 @@ static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *er
 
 static int float_type(ply_type t) { return t == PLY_FLOAT32 || t == PLY_FLOAT64; }
 
+/* The origin of a model without one: the means' mean, against their RMS spread (the
+ * rule of core/mgs_origin.h: (0,0,0) unless the model is far from it). */
+static void choose_origin(const double *xyz, size_t n, double origin[3]) {
+  double c[3] = {0, 0, 0}, ss = 0;
+  for (size_t i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) c[k] += xyz[3 * i + (size_t)k];
+  for (int k = 0; k < 3; k++) c[k] = n ? c[k] / (double)n : 0;
+  for (size_t i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) ss += (xyz[3 * i + (size_t)k] - c[k]) * (xyz[3 * i + (size_t)k] - c[k]);
+  mgs_origin_choose(c, n ? sqrt(ss / (double)n) : 1.0, origin);
+}
+
 mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err) {
+  static const double zero[3] = {0, 0, 0};
+  return mgs_ply_read_gaussians_local(path, zero, out, err);
+}
+
+mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, mgs_gaussians **out, mgs_error *err) {
   *out = NULL;
   ply_file pf;
   mgs_status st = ply_open(path, &pf, err);
@@ -138,9 +156,26 @@ mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_err
   ply_close(&pf);
   if (st != MGS_OK) {
     mgs_gaussians_destroy(r.g);
+    free(r.xyz64);
     return st;
   }
-  *out = r.g;
+  /* the means into the local frame, in double before they become float */
+  mgs_gaussians *g = r.g;
+  if (origin) for (int k = 0; k < 3; k++) g->origin[k] = origin[k];
+  else choose_origin(r.xyz64, g->n, g->origin);
+  for (size_t i = 0; i < g->n; i++)
+    for (int k = 0; k < 3; k++) {
+      float f = (float)(r.xyz64[3 * i + (size_t)k] - g->origin[k]);
+      if (!isfinite(f)) {
+        free(r.xyz64);
+        mgs_gaussians_destroy(g);
+        return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite in float (%g)", path, i,
+                             fixed_names[G_X + k], r.xyz64[3 * i + (size_t)k]);
+      }
+      g->mean[3 * i + (size_t)k] = f;
+    }
+  free(r.xyz64);
+  *out = g;
   return MGS_OK;
 }
 
@@ -176,17 +211,20 @@ mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs
   FILE *fp = NULL;
   st = mgs_atomic_open(path, &af, &fp, err);
   if (st != MGS_OK) return st;
-  /* The header exactly as the reference (plyfile) writes it. */
+  /* The header exactly as the reference (plyfile) writes it; a model with an origin gets
+     double x y z (world = origin + mean, in double): float32 cannot hold a position at
+     1e5..1e6 to the model's precision, and PLY readers (plyfile, ours) take doubles. */
+  const int world64 = !mgs_origin_is_zero(g->origin);
   fprintf(fp, "ply\nformat binary_little_endian 1.0\nelement vertex %zu\n", g->n);
-  fputs("property float x\nproperty float y\nproperty float z\n"
-        "property float nx\nproperty float ny\nproperty float nz\n"
+  fputs(world64 ? "property double x\nproperty double y\nproperty double z\n" : "property float x\nproperty float y\nproperty float z\n", fp);
+  fputs("property float nx\nproperty float ny\nproperty float nz\n"
         "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n", fp);
   for (int j = 0; j < 3 * R; j++) fprintf(fp, "property float f_rest_%d\n", j);
   fputs("property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
         "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n", fp);
 
   const int nf = 3 + 3 + 3 + 3 * R + 1 + 3 + 4;
-  const size_t row_bytes = (size_t)nf * 4;
+  const size_t row_bytes = (size_t)nf * 4 + (world64 ? 12 : 0);
   enum { ROWS_PER_CHUNK = 4096 };
   unsigned char *buf = malloc(row_bytes * ROWS_PER_CHUNK);
   if (!buf) {
@@ -197,7 +235,10 @@ mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs
     size_t i1 = i0 + ROWS_PER_CHUNK < g->n ? i0 + ROWS_PER_CHUNK : g->n;
     unsigned char *p = buf;
     for (size_t i = i0; i < i1; i++) {
-      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->mean[i * 3 + (size_t)k]);
+      if (world64)
+        for (int k = 0; k < 3; k++, p += 8) ply_put_f64le(p, g->origin[k] + (double)g->mean[i * 3 + (size_t)k]);
+      else
+        for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->mean[i * 3 + (size_t)k]);
       for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, 0.0f); /* normals: unused, as the reference */
       for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->sh_dc[i * 3 + (size_t)k]);
       for (int c = 0; c < 3; c++)

@@ -14,6 +14,7 @@ void mgs_point_cloud_destroy(mgs_point_cloud *pc) {
   if (!pc) return;
   free(pc->xyz);
   free(pc->rgb);
+  free(pc->xyz64);
   free(pc);
 }
 
@@ -31,7 +32,8 @@ static mgs_status alloc_cloud(mgs_point_cloud **out, size_t n) {
   pc->n = n;
   pc->xyz = malloc(sizeof(float) * 3 * (n ? n : 1));
   pc->rgb = malloc(sizeof(float) * 3 * (n ? n : 1));
-  if (!pc->xyz || !pc->rgb) { mgs_point_cloud_destroy(pc); return MGS_ERR_NOMEM; }
+  pc->xyz64 = malloc(sizeof(double) * 3 * (n ? n : 1));
+  if (!pc->xyz || !pc->rgb || !pc->xyz64) { mgs_point_cloud_destroy(pc); return MGS_ERR_NOMEM; }
   *out = pc;
   return MGS_OK;
 }
@@ -47,6 +49,7 @@ static mgs_status point_row(void *ctx, size_t row, const double *v, mgs_error *e
     if (!isfinite(f))
       return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite (%g)", r->path, row, names[k], v[cols[k]]);
     r->pc->xyz[row * 3 + (size_t)k] = f;
+    r->pc->xyz64[row * 3 + (size_t)k] = v[cols[k]];
   }
   if (r->cr >= 0) {
     const int cc[3] = {r->cr, r->cg, r->cb};

@@ -185,6 +185,7 @@ void mgs_mpi_merged_vdb(const mgs_gaussians *merged, const mgs_partition *part, 
   meta.tau = sp.tau;
   meta.voxel_size = h;
   snprintf(meta.source, sizeof meta.source, "morsegs train --mpi (%d ranks, merged by blocks)", size);
+  for (int k = 0; k < 2 && merged; k++) mgs_vdb_grid_translate(k ? sdf : density, merged->origin); /* world coordinates */
   const mgs_vdb_grid *grids[2] = {density, sdf};
   if (mgs_vdb_write(path, grids, 2, NULL, 0, &meta, &err)) mgs_mpi_die(rank, err.msg);
   mgs_vdb_grid_destroy(sdf);

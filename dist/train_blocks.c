@@ -306,6 +306,7 @@ static int train_blocks(const mgs_train_config *mo, const char *data, int rank, 
     merged = mgs_gaussians_create(n_all ? n_all : 1, g->sh_degree);
     size_t first;
     if (!merged || mgs_gaussians_append(merged, n_all, &first, &err)) mgs_mpi_die(rank, "out of memory for the merged model");
+    memcpy(merged->origin, ds->origin, sizeof merged->origin); /* every rank's frame: the same load of the same folder */
     /* unpack rank by rank: each block is its ranks' rows, group by group */
     size_t row0 = 0;
     for (int r = 0; r < size; r++) {
@@ -333,6 +334,7 @@ static int train_blocks(const mgs_train_config *mo, const char *data, int rank, 
       mgs_settings_set(&s, "white_background", ds->white_background ? "True" : "False", 0);
       mgs_settings_seti(&s, "mpi_ranks", size);
       mgs_config_record(&rec, &s);
+      mgs_run_record_origin(&s, ds);
       char *cfg = mgs_path_join(mo->output, "cfg_args");
       st = mgs_settings_write(cfg, &s, &err);
       free(cfg);

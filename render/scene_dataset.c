@@ -293,7 +293,7 @@ static mgs_status build_into(const char *stage, mgs_mesh *m, const mgs_scene_opt
     free(p);
   }
   if (s == MGS_OK && o->init != MGS_SCENE_INIT_NONE) {
-    mgs_point_cloud pc = {0, NULL, NULL};
+    mgs_point_cloud pc = {0, NULL, NULL, NULL};
     s = make_init_points(m, o, &pc, err);
     if (s == MGS_OK) {
       char *p = mgs_path_join(stage, "points3d.ply");

@@ -5,15 +5,18 @@
  * then the header fields below, the view order, the model's six groups, Adam's first and
  * second moments, the strategy's name (32 bytes) and its blob (u64 size + bytes), the
  * loss terms (version 2: u32 count, then per term its name (32 bytes) and blob), and a
- * final u64 FNV-1a checksum of everything before it. Version 1 files (no terms) are read
- * by runs without loss terms. */
+ * scene origin (version 3: 3 f64, core/mgs_origin.h), and a final u64 FNV-1a checksum of
+ * everything before it. Version 1 files (no terms) are read by runs without loss terms;
+ * versions 1 and 2 (no origin) by runs whose dataset has the origin (0,0,0). A resume
+ * whose dataset gives another origin (the folder changed) is refused. */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include "train/trainer_internal.h"
 #include "core/mgs_fs.h"
+#include "core/mgs_origin.h"
 
-#define CKPT_VERSION 2u
+#define CKPT_VERSION 3u
 static const char CKPT_MAGIC[8] = {'M', 'G', 'S', 'C', 'K', 'P', 'T', 0};
 
 typedef struct {
@@ -120,6 +123,7 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   free(blob);
   hw(&w, tblob, tblob_len);
   free(tblob);
+  hw(&w, t->ds->origin, 3 * sizeof(double));
   uint64_t sum = w.h;
   if (w.ok && !(w.ok = fwrite(&sum, sizeof sum, 1, f) == 1)) w.errnum = errno;
   if (!w.ok) {
@@ -155,8 +159,19 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   ckpt_header h;
   if (!rd(&r, &ver, 4) || !rd(&r, &bom, 4)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   if (bom != 0x01020304u) FAIL(MGS_ERR_FORMAT, "%s: checkpoint written on a machine of another byte order", path);
-  if (ver != CKPT_VERSION && !(ver == 1u && t->n_terms == 0)) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
+  if (ver != CKPT_VERSION && ver != 2u && !(ver == 1u && t->n_terms == 0)) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
   if (!rd(&r, &h, sizeof h)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
+  /* the scene origin (the last record, before the checksum) first: nothing is replaced
+     when the dataset now gives another one */
+  double origin[3] = {0, 0, 0};
+  if (ver >= 3u) {
+    if (r.left < sizeof origin) FAIL(MGS_ERR_FORMAT, "%s: checkpoint truncated (scene origin)", path);
+    memcpy(origin, r.p + r.left - sizeof origin, sizeof origin);
+    r.left -= sizeof origin;
+  }
+  if (memcmp(origin, t->ds->origin, sizeof origin) != 0 && !(mgs_origin_is_zero(origin) && mgs_origin_is_zero(t->ds->origin)))
+    FAIL(MGS_ERR_ARG, "%s: checkpoint was trained with the scene origin (%.17g, %.17g, %.17g), the dataset now gives (%.17g, %.17g, %.17g) (its cameras or points changed)",
+         path, origin[0], origin[1], origin[2], t->ds->origin[0], t->ds->origin[1], t->ds->origin[2]);
   if (h.perm_len != t->perm_len || h.perm_pos > h.perm_len)
     FAIL(MGS_ERR_FORMAT, "%s: checkpoint has %llu training views, the dataset %zu", path, (unsigned long long)h.perm_len, t->perm_len);
   if (h.sh_degree != t->g->sh_degree || h.active_sh < 0 || h.active_sh > h.sh_degree)

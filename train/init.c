@@ -185,11 +185,24 @@ mgs_status mgs_init_random(size_t count, const double lo[3], const double hi[3],
 
 mgs_status mgs_init_random_for_dataset(const mgs_dataset *ds, size_t count, int sh_degree, uint64_t seed,
                                        mgs_gaussians **out, mgs_error *err) {
-  double lo[3], hi[3];
+  double lo[3], hi[3], centre[3] = {0, 0, 0};
+  if (ds->format == MGS_DATASET_NERF_SYNTHETIC) {
+    /* The reference's cube sits at the world origin because Blender scenes are modelled
+       there; where a folder's cameras look is the same place for a centred folder and the
+       moved place for a moved one. Snapped to 1/64 of the cameras' extent (a power of
+       two) so that the float noise of a centred folder's matrices gives exactly 0: the
+       reference's init, bit for bit. */
+    double p[3];
+    if (mgs_dataset_look_at(ds, p)) {
+      double step = exp2(ceil(log2(ds->extent / 64.0)));
+      for (int k = 0; k < 3; k++) centre[k] = step * nearbyint(p[k] / step);
+    }
+  } else {
+    for (int k = 0; k < 3; k++) centre[k] = ds->center[k];
+  }
   for (int k = 0; k < 3; k++) {
     double h = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 1.3 : 0.5 * ds->extent / 1.1;
-    double cc = ds->format == MGS_DATASET_NERF_SYNTHETIC ? 0.0 : ds->center[k];
-    lo[k] = cc - h; hi[k] = cc + h;
+    lo[k] = centre[k] - h; hi[k] = centre[k] + h;
   }
   mgs_rng rng;
   mgs_rng_init(&rng, seed, 0x696e6974u);

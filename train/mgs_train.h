@@ -104,8 +104,11 @@ mgs_status mgs_knn3_mean_sq(const float *xyz, size_t n, float *out, mgs_error *e
 mgs_status mgs_init_random(size_t count, const double lo[3], const double hi[3], int sh_degree,
                            mgs_rng *rng, mgs_gaussians **out, mgs_error *err);
 /* The random init for a dataset without initial points: the reference's cube of half-size
- * 1.3 for NeRF-synthetic; for other formats (scale unknown) a cube of half-size
- * extent/1.1 * 0.5 around the cameras' centre. `seed` is the run's seed (its own stream). */
+ * 1.3 for NeRF-synthetic, centred where the training cameras look (mgs_dataset_look_at,
+ * snapped to 1/64 of the extent: exactly the reference's cube at (0,0,0) for a centred
+ * folder, the same cube moved for a moved one); for other formats (scale unknown) a cube
+ * of half-size extent/1.1 * 0.5 around the cameras' centre. All in the dataset's local
+ * frame (its origin). `seed` is the run's seed (its own stream). */
 mgs_status mgs_init_random_for_dataset(const mgs_dataset *ds, size_t count, int sh_degree, uint64_t seed,
                                        mgs_gaussians **out, mgs_error *err);
 
@@ -249,9 +252,11 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
 /* ---- run folder -------------------------------------------------------------------- */
 
 /* RUN/cameras.json in the reference layout (test then train views: id, img_name, width,
- * height, position, rotation (camera-to-world), fy, fx). */
+ * height, position (world: the dataset's origin added in double), rotation
+ * (camera-to-world), fy, fx). */
 mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs_error *err);
-/* RUN/point_cloud/iteration_N/point_cloud.ply */
+/* RUN/point_cloud/iteration_N/point_cloud.ply (world coordinates: g->origin added, see
+ * mgs_ply_write_gaussians) */
 mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
 /* Largest N with RUN/point_cloud/iteration_N/point_cloud.ply, or -1. */
 int mgs_run_latest_iteration(const char *run_dir);
@@ -265,7 +270,8 @@ void mgs_run_lock_release(mgs_run_lock *l); /* NULL is fine */
 
 /* Opens a run for render/eval: reads cfg_args (source_path, downscale, background,
  * test_every), loads the dataset (images only if load_images) and the .ply of
- * `iteration` (-1: the latest). */
+ * `iteration` (-1: the latest), its means made relative to the dataset's origin (which
+ * must equal cfg_args' scene_origin when recorded). */
 mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds,
                         mgs_gaussians **g, int *iteration_out, mgs_error *err);
 
@@ -284,6 +290,8 @@ void mgs_settings_seti(mgs_settings *s, const char *key, long long value);
 const char *mgs_settings_get(const mgs_settings *s, const char *key);
 mgs_status mgs_settings_write(const char *path, const mgs_settings *s, mgs_error *err);
 mgs_status mgs_settings_read(const char *path, mgs_settings *s, mgs_error *err);
+/* scene_origin='x y z': the dataset's origin (core/mgs_origin.h) in the settings record. */
+void mgs_run_record_origin(mgs_settings *s, const mgs_dataset *ds);
 
 #ifdef __cplusplus
 }

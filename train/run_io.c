@@ -7,6 +7,7 @@
 #include <cjson/cJSON.h>
 #include "train/mgs_train.h"
 #include "core/mgs_fs.h"
+#include "core/mgs_origin.h"
 #include "core/mgs_ply.h"
 
 mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs_error *err) {
@@ -22,7 +23,8 @@ mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs
       cJSON_AddStringToObject(c, "img_name", v->name ? v->name : "");
       cJSON_AddNumberToObject(c, "width", v->cam.width);
       cJSON_AddNumberToObject(c, "height", v->cam.height);
-      double pos[3] = {v->cam.c2w[3], v->cam.c2w[7], v->cam.c2w[11]};
+      /* world coordinates: the dataset's origin added back in double */
+      double pos[3] = {ds->origin[0] + v->cam.c2w[3], ds->origin[1] + v->cam.c2w[7], ds->origin[2] + v->cam.c2w[11]};
       cJSON_AddItemToObject(c, "position", cJSON_CreateDoubleArray(pos, 3));
       cJSON *rot = cJSON_CreateArray();
       for (int r = 0; r < 3; r++) cJSON_AddItemToArray(rot, cJSON_CreateDoubleArray(v->cam.c2w + 4 * r, 3));
@@ -194,6 +196,12 @@ mgs_status mgs_settings_read(const char *path, mgs_settings *s, mgs_error *err) 
   return st;
 }
 
+void mgs_run_record_origin(mgs_settings *s, const mgs_dataset *ds) {
+  char b[96];
+  mgs_origin_format(ds->origin, b, sizeof b);
+  mgs_settings_set(s, "scene_origin", b, 1);
+}
+
 /* ---- opening a finished run ----------------------------------------------------------- */
 
 mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds_out,
@@ -230,11 +238,25 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
   char sub[96];
   snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", it);
   char *ply = mgs_path_join(run_dir, sub);
-  st = mgs_ply_read_gaussians(ply, g_out, err);
+  /* the dataset first: its origin (the same as in training: chosen from the same files)
+     places the model's world coordinates back in the local frame */
+  const char *rec = mgs_settings_get(&s, "scene_origin");
+  double origin[3];
+  st = mgs_dataset_load(src, &o, ds_out, err);
+  if (st == MGS_OK && rec && !mgs_origin_parse(rec, origin))
+    st = mgs_error_set(err, MGS_ERR_FORMAT, "%s/cfg_args: scene_origin '%s' is not three numbers", run_dir, rec);
+  else if (st == MGS_OK && rec && memcmp(origin, (*ds_out)->origin, sizeof origin) != 0 &&
+           !(mgs_origin_is_zero(origin) && mgs_origin_is_zero((*ds_out)->origin)))
+    st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: trained with the scene origin %s, the dataset %s now gives another (its cameras or points changed)",
+                       run_dir, rec, src);
+  if (st == MGS_OK) st = mgs_ply_read_gaussians_local(ply, (*ds_out)->origin, g_out, err);
   free(ply);
-  if (st == MGS_OK) st = mgs_dataset_load(src, &o, ds_out, err);
   mgs_settings_free(&s);
-  if (st) { mgs_gaussians_destroy(*g_out); *g_out = NULL; return st; }
+  if (st) {
+    mgs_gaussians_destroy(*g_out); *g_out = NULL;
+    mgs_dataset_destroy(*ds_out); *ds_out = NULL;
+    return st;
+  }
   if (iteration_out) *iteration_out = it;
   return MGS_OK;
 }

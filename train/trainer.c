@@ -58,6 +58,8 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   t->o = *o;
   t->ds = ds;
   t->g = init;
+  /* the model lives in the dataset's local frame; its .ply is written in world coordinates */
+  if (init) for (int k = 0; k < 3; k++) init->origin[k] = ds->origin[k];
   t->strategy = strategy;
   mgs_status st = MGS_OK;
   if (!init || init->n == 0) st = mgs_error_set(err, MGS_ERR_ARG, "trainer: the initial model is empty");

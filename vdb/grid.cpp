@@ -81,6 +81,13 @@ extern "C" void mgs_vdb_grid_translation(const mgs_vdb_grid *g, double t[3]) {
   Vec3d o = g->grid->transform().indexToWorld(Vec3d(0.0));
   t[0] = o[0]; t[1] = o[1]; t[2] = o[2];
 }
+extern "C" void mgs_vdb_grid_translate(mgs_vdb_grid *g, const double offset[3]) {
+  if (!offset || (offset[0] == 0 && offset[1] == 0 && offset[2] == 0)) return;
+  // a copy: grids made from one another may share their transform
+  auto xf = g->grid->transform().copy();
+  xf->postTranslate(Vec3d(offset[0], offset[1], offset[2]));
+  g->grid->setTransform(xf);
+}
 extern "C" float mgs_vdb_grid_background(const mgs_vdb_grid *g) { return g->grid->background(); }
 extern "C" size_t mgs_vdb_grid_active_voxel_count(const mgs_vdb_grid *g) { return (size_t)g->grid->activeVoxelCount(); }
 extern "C" size_t mgs_vdb_grid_leaf_count(const mgs_vdb_grid *g) { return (size_t)g->grid->tree().leafCount(); }

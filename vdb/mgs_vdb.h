@@ -63,6 +63,10 @@ mgs_vdb_class mgs_vdb_grid_class(const mgs_vdb_grid *g);
 void mgs_vdb_grid_set_class(mgs_vdb_grid *g, mgs_vdb_class cls);
 double mgs_vdb_grid_voxel_size(const mgs_vdb_grid *g);
 void mgs_vdb_grid_translation(const mgs_vdb_grid *g, double t[3]);
+/* Adds offset (world units, double) to the transform's translation; the voxels stay. Grids
+ * are built in a model's local float frame; this puts them at the model's origin
+ * (g->origin, core/mgs_origin.h) so a .vdb is in world coordinates. NULL or 0: no-op. */
+void mgs_vdb_grid_translate(mgs_vdb_grid *g, const double offset[3]);
 float mgs_vdb_grid_background(const mgs_vdb_grid *g);
 size_t mgs_vdb_grid_active_voxel_count(const mgs_vdb_grid *g);
 size_t mgs_vdb_grid_leaf_count(const mgs_vdb_grid *g);
@@ -274,6 +278,9 @@ mgs_status mgs_vdb_points_create_critical(size_t n, const float *xyz, const int3
                                           const float *persistence, double voxel_size,
                                           mgs_vdb_points **out, mgs_error *err);
 void mgs_vdb_points_destroy(mgs_vdb_points *p);
+/* Moves the point grid's transform by offset (double): positions given relative to a local
+ * origin (float) land at origin + position in the file (see mgs_vdb_grid_translate). */
+void mgs_vdb_points_translate(mgs_vdb_points *p, const double offset[3]);
 size_t mgs_vdb_points_count(const mgs_vdb_points *p);
 /* Reads such a point grid back (name NULL = "critical"); arrays malloc'd (free()), in the
  * grid's spatial order (not the order written). Errors name a missing attribute. */

@@ -57,6 +57,13 @@ extern "C" mgs_status mgs_vdb_points_create_critical(size_t n, const float *xyz,
   return MGS_OK;
 }
 
+extern "C" void mgs_vdb_points_translate(mgs_vdb_points *p, const double offset[3]) {
+  if (!p || !offset || (offset[0] == 0 && offset[1] == 0 && offset[2] == 0)) return;
+  auto xf = p->grid->transform().copy();
+  xf->postTranslate(Vec3d(offset[0], offset[1], offset[2]));
+  p->grid->setTransform(xf);
+}
+
 extern "C" void mgs_vdb_points_destroy(mgs_vdb_points *p) { delete p; }
 extern "C" size_t mgs_vdb_points_count(const mgs_vdb_points *p) { return p ? p->count : 0; }
 

@@ -43,6 +43,8 @@ static void expect_load_fail(const char *dir, int load_images, mgs_status want, 
 }
 
 /* ---------------- NeRF-synthetic ---------------- */
+static void test_nerf_synthetic(void);
+static void test_far_origin(void);
 
 #define FOVX_16 "0.9272952180016122" /* 2 atan(1/2): fx = 16 at width 16 */
 #define M_FRONT "[[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]"   /* at (0,0,4) looking down -z */
@@ -68,10 +70,50 @@ static const char *good_train_json =
     "{\"file_path\": \"./train/r_0\", \"rotation\": 0.1, \"transform_matrix\": " M_FRONT "},"
     "{\"file_path\": \"./train/r_1\", \"transform_matrix\": " M_SIDE "}]}";
 
+/* Issue 28: the same two cameras and points moved by (1e6, -3e5, 2e5): the dataset's origin
+ * is that translation exactly (on the power-of-two grid of the extent), and cameras and
+ * points are the centred ones in the local frame (points exactly: double in the file). */
+static void test_far_origin(void) {
+  const char *far_json =
+      "{\"camera_angle_x\": " FOVX_16 ", \"frames\": ["
+      "{\"file_path\": \"./train/r_0\", \"transform_matrix\": [[1,0,0,1000000],[0,1,0,-300000],[0,0,1,200004],[0,0,0,1]]},"
+      "{\"file_path\": \"./train/r_1\", \"transform_matrix\": [[0,0,1,1000004],[0,1,0,-300000],[-1,0,0,200000],[0,0,0,1]]}]}";
+  const char *dir = make_nerf("io_nerf_far", far_json);
+  io_write_text(join(dir, "points3d.ply"),
+                "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\nproperty double z\nend_header\n"
+                "1000000.25 -299999.5 200000.125\n1000001 -300000 200000.0000001\n");
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  mgs_dataset *d = NULL;
+  mgs_error err = {0};
+  CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+  if (!d) return;
+  CHECK_MSG(d->origin[0] == 1000000 && d->origin[1] == -300000 && d->origin[2] == 200000, "origin %.17g %.17g %.17g", d->origin[0],
+            d->origin[1], d->origin[2]);
+  mgs_view *v0 = &d->views[MGS_SPLIT_TRAIN][0], *v1 = &d->views[MGS_SPLIT_TRAIN][1];
+  check_project(&v0->cam, 0.5, 0.25, 0, 10, 5);
+  check_project(&v1->cam, 0, 0.25, -0.5, 10, 5);
+  check_project(&d->views[MGS_SPLIT_TEST][0].cam, 0.5 - 1e6, 0.25 + 3e5, -2e5, 10, 5); /* the test view was not moved */
+  CHECK_NEAR(d->center[0], 2, 1e-9);
+  CHECK_NEAR(d->center[2], 2, 1e-9);
+  CHECK_NEAR(d->extent, 1.1 * sqrt(8.0), 1e-9);
+  CHECK(d->init_points && d->init_points->n == 2);
+  if (d->init_points && d->init_points->n == 2) {
+    const float *x = d->init_points->xyz;
+    CHECK(x[0] == 0.25f && x[1] == 0.5f && x[2] == 0.125f && x[3] == 1.0f && x[4] == 0.0f);
+    CHECK_NEAR(x[5], 1e-7, 1e-10); /* the file's 200000.0000001 is itself rounded */
+    CHECK(d->init_points->xyz64 == NULL);
+  }
+  double p[3];
+  CHECK(mgs_dataset_look_at(d, p)); /* the two optical axes meet at (0,0,0) (local) */
+  for (int k = 0; k < 3; k++) CHECK_NEAR(p[k], 0, 1e-9);
+  mgs_dataset_destroy(d);
+}
+
 static void test_nerf_synthetic(void) {
   const char *dir = make_nerf("io_nerf", good_train_json);
   /* initial points and a ground-truth mesh beside it */
-  mgs_point_cloud pc = {2, (float[]){1, 2, 3, 4, 5, 6}, (float[]){1, 0, 0, 0, 1, 0}};
+  mgs_point_cloud pc = {2, (float[]){1, 2, 3, 4, 5, 6}, (float[]){1, 0, 0, 0, 1, 0}, NULL};
   mgs_error err = {0};
   CHECK_OK(mgs_ply_write_points(join(dir, "points3d.ply"), &pc, &err), &err);
   io_write_text(join(dir, "gt_mesh.ply"), "not read by the loader");
@@ -273,7 +315,7 @@ static const char *make_ns(const char *name, const char *top_fields, const char 
 
 static void test_nerfstudio(void) {
   const char *dir = make_ns("io_ns", NS_TOP ", \"ply_file_path\": \"sparse_pc.ply\"", ", \"fl_x\": 32");
-  mgs_point_cloud pc = {1, (float[]){1, 2, 3}, (float[]){1, 0, 0}};
+  mgs_point_cloud pc = {1, (float[]){1, 2, 3}, (float[]){1, 0, 0}, NULL};
   mgs_error err = {0};
   CHECK_OK(mgs_ply_write_points(join(dir, "sparse_pc.ply"), &pc, &err), &err);
   mgs_dataset_options o;
@@ -519,6 +561,7 @@ static void test_colmap_bad(void) {
 
 int main(void) {
   RUN(test_nerf_synthetic);
+  RUN(test_far_origin);
   RUN(test_nerf_bad);
   RUN(test_nerfstudio);
   RUN(test_nerfstudio_bad);

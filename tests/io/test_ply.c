@@ -6,6 +6,8 @@
 #include "core/mgs_gaussians.h"
 #include "core/mgs_ply.h"
 #include "mgs_test.h"
+#include "core/mgs_origin.h"
+#include "core/mgs_fs.h"
 
 static const char *dir;
 static char path_buf[4096];
@@ -437,6 +439,66 @@ static void test_points(void) {
   free(pc.rgb);
 }
 
+/* Means equal to within the double rounding of origin + mean (|m| below ~|origin| 2^-29
+ * loses bits there: ~1e-10 absolute at 1e6), everything else bit for bit. */
+static int same_model_far(const mgs_gaussians *g, mgs_gaussians *h) {
+  if (!h || g->n != h->n) return 0;
+  double dmax = 0;
+  for (size_t i = 0; i < 3 * g->n; i++) dmax = fmax(dmax, fabs((double)g->mean[i] - h->mean[i]));
+  if (dmax > 3e-10) { fprintf(stderr, "means differ by %g\n", dmax); return 0; }
+  memcpy(h->mean, g->mean, 3 * g->n * sizeof(float));
+  return same_model(g, h);
+}
+
+/* Issue 28: a model with an origin is written in world coordinates with double x y z and
+ * read back into the same local frame (given or chosen origin); a centred model keeps the
+ * all-float layout and origin (0,0,0), bit for bit. */
+static void test_origin(void) {
+  mgs_gaussians *g = random_model(300, 1);
+  for (size_t i = 0; i < 3 * g->n; i++) g->mean[i] *= 1e-5f; /* a scene of size ~1 */
+  const double o[3] = {1048576.0, -393216.0, 12288.0}; /* as mgs_origin_choose makes them */
+  memcpy(g->origin, o, sizeof o);
+  mgs_error err = {0};
+  const char *p = tmp_path("far.ply");
+  CHECK_OK(mgs_ply_write_gaussians(p, g, &err), &err);
+  char *text = NULL;
+  size_t n = 0;
+  CHECK_OK(mgs_read_file(p, &text, &n, &err), &err);
+  CHECK(text && strstr(text, "property double x\nproperty double y\nproperty double z\nproperty float nx\n"));
+  free(text);
+  mgs_gaussians *h = NULL;
+  CHECK_OK(mgs_ply_read_gaussians_local(p, o, &h, &err), &err);
+  CHECK(h && same_model_far(g, h) && memcmp(h->origin, o, sizeof o) == 0);
+  mgs_gaussians_destroy(h);
+  h = NULL;
+  CHECK_OK(mgs_ply_read_gaussians_local(p, NULL, &h, &err), &err); /* chosen: the same origin */
+  CHECK(h && same_model_far(g, h) && memcmp(h->origin, o, sizeof o) == 0);
+  mgs_gaussians_destroy(h);
+  h = NULL;
+  CHECK_OK(mgs_ply_read_gaussians(p, &h, &err), &err); /* world floats */
+  CHECK(h && h->origin[0] == 0 && fabs(h->mean[0] - (o[0] + g->mean[0])) <= 0.07);
+  mgs_gaussians_destroy(h);
+  h = NULL;
+  memset(g->origin, 0, sizeof g->origin);
+  CHECK_OK(mgs_ply_write_gaussians(p, g, &err), &err);
+  CHECK_OK(mgs_ply_read_gaussians_local(p, NULL, &h, &err), &err);
+  CHECK(h && same_model(g, h) && mgs_origin_is_zero(h->origin));
+  mgs_gaussians_destroy(h);
+  mgs_gaussians_destroy(g);
+  /* the rule: centred scenes get 0, far ones a power-of-two grid point near their centre */
+  double c[3] = {3, -2, 1}, r[3];
+  mgs_origin_choose(c, 1.0, r);
+  CHECK(mgs_origin_is_zero(r));
+  const double far[3] = {100003.2, 5.0, -99999.1};
+  mgs_origin_choose(far, 4.4, r);
+  CHECK(r[0] == 100000 && r[1] == 8 && r[2] == -100000);
+  char b[96];
+  mgs_origin_format(r, b, sizeof b);
+  double back[3];
+  CHECK(mgs_origin_parse(b, back) && memcmp(back, r, sizeof r) == 0);
+  CHECK(!mgs_origin_parse("1 2", back) && !mgs_origin_parse("1 2 x", back));
+}
+
 int main(void) {
   dir = mgs_test_tmpdir("io_ply");
   RUN(test_round_trip);
@@ -445,5 +507,6 @@ int main(void) {
   RUN(test_bad_input);
   RUN(test_write_refuses_nan);
   RUN(test_points);
+  RUN(test_origin);
   return mgs_test_finish();
 }

@@ -10,7 +10,7 @@ PKGS=(
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
-  netgen-doc
+  netgen-doc python3-open3d
 )
 missing=()
 for p in "${PKGS[@]}"; do

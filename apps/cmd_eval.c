@@ -21,7 +21,8 @@ static void usage(FILE *f) {
     "usage: morsegs eval RUN [options]\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --split S          test (default), val or train\n"
-    "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply)\n"
+    "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply): the\n"
+    "                         alpha-field's surface and the depth-fused one (morsegs vdb RUN)\n"
     "      --no-images        do not write the side-by-side PNGs\n"
     "      --max-views N      evaluate at most N views (evenly spaced)\n");
 }
@@ -166,8 +167,19 @@ int mgs_cmd_eval(int argc, char **argv) {
     cJSON *geo = cJSON_CreateObject();
     int grc = mgs_eval_geometry(ply, gt_mesh, geo, table, sizeof table);
     free(ply);
-    if (grc == 0) cJSON_AddItemToObject(res, "geometry", geo);
-    else {
+    if (grc == 0) {
+      /* the depth-fused surface beside the α-field's (geometry.fused) */
+      cJSON *fused = cJSON_CreateObject();
+      size_t used = strlen(table);
+      if (mgs_eval_geometry_fused(run, it, gt_mesh, fused, table + used, sizeof table - used) == 0)
+        cJSON_AddItemToObject(geo, "fused", fused);
+      else {
+        cJSON_Delete(fused);
+        table[used] = 0;
+        fprintf(stderr, "morsegs eval: note: the depth-fused surface's geometry skipped (the fusion failed)\n");
+      }
+      cJSON_AddItemToObject(res, "geometry", geo);
+    } else {
       cJSON_Delete(geo);
       table[0] = 0;
       fprintf(stderr, "morsegs eval: note: geometry metrics against %s skipped (the geometry evaluation failed)\n",

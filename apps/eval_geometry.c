@@ -126,7 +126,7 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
                "  Chamfer distance      %.6g  (accuracy %.6g, completeness %.6g)\n"
                "  F-score @ %.4g        %.4f  (precision %.4f, recall %.4f; threshold = 1%% of GT diagonal)\n"
                "  floaters (H2)         %ld of %zu Gaussians (opacity < 0.01 and > 3 sigma from GT)\n"
-               "  surface               {A = %.2g}, voxel %.4g, %zu triangles\n",
+               "  surface               {A = %.2g} (alpha-field), voxel %.4g, %zu triangles\n",
                gm.chamfer, gm.accuracy, gm.completeness, thr, gm.fscore, gm.precision, gm.recall, floaters, g->n,
                EVAL_TAU, info.voxel_size, surf ? surf->nt : 0);
     else

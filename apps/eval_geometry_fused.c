@@ -14,15 +14,15 @@
 #define EVAL_SAMPLES 100000
 #define EVAL_FSCORE_REL 0.01
 
-int mgs_eval_geometry_fused(const char *run_dir, int iteration, const char *gt_mesh_path, void *cjson_object_out,
-                            char *table_out, size_t table_len) {
+int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, const char *gt_mesh_path,
+                            void *cjson_object_out, char *table_out, size_t table_len) {
   cJSON *obj = (cJSON *)cjson_object_out;
   mgs_error err = {0};
   mgs_mesh *gt = NULL, *surf = NULL;
   mgs_vdb_grid *sdf = NULL;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
-  fo.iteration = iteration;
+  if (opts) fo = *opts;
   mgs_fusion_report rep;
   mgs_geometry_metrics gm;
   int rc = 1;
@@ -54,6 +54,9 @@ int mgs_eval_geometry_fused(const char *run_dir, int iteration, const char *gt_m
     cJSON_AddNumberToObject(obj, "pixel_footprint", rep.footprint);
     cJSON_AddNumberToObject(obj, "voxel_size", rep.voxel_size);
     cJSON_AddNumberToObject(obj, "truncation", rep.truncation);
+    cJSON_AddNumberToObject(obj, "voxel_footprints", rep.voxel_size / rep.footprint);
+    cJSON_AddNumberToObject(obj, "truncation_footprints", rep.truncation / rep.footprint);
+    cJSON_AddNumberToObject(obj, "min_weight", fo.min_weight);
     cJSON_AddNumberToObject(obj, "surface_triangles", (double)surf->nt);
     cJSON_AddNumberToObject(obj, "seconds", mgs_now() - t0);
   }

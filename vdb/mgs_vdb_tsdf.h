@@ -48,11 +48,14 @@ mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mgs_camera *c
 mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vdb_grid **weight, mgs_error *err);
 
 /* The level set "sdf" of the fused zero crossing, valid as the α-field's (mgs_vdb.h,
- * CLOSEST: every neighbour pair within one voxel): voxels seen by at least min_weight
- * views keep their fused value, the others take the sign of their neighbourhood (OpenVDB
- * signed flood fill: inside a closed surface, -t), and the field 1/2 - D/(2t) goes
- * through mgs_vdb_sdf_from_alpha at tau = 1/2, so the band holds distances to the zero
- * crossing itself. Empty fused volume: MGS_ERR_FORMAT. */
+ * CLOSEST: every neighbour pair within one voxel). Voxels seen by at least min_weight
+ * views keep their fused value D; the unobserved inside behind the truncation is grown
+ * from the observed inside through unobserved voxels only (w + 9 voxels: the band's leaves;
+ * no global flood fill, which an open shell leaks to all of space); the field
+ * 1/2 - D/(2t) (1 on the grown inside, 0 elsewhere) goes through the CLOSEST construction
+ * at tau = 1/2 with seeds only where all 6 neighbours were observed, so the band holds
+ * distances to the fused zero crossing and nothing else. Empty fused volume or no
+ * surface: MGS_ERR_FORMAT. */
 mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
                                mgs_error *err);
 

@@ -3,7 +3,7 @@
 // (parallel over views, per-thread key lists), then every block is fused against all the
 // views of the batch (parallel over blocks: each block is written by one thread only).
 #include <openvdb/tools/ChangeBackground.h>
-#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <algorithm>
 #include <cmath>
@@ -211,51 +211,57 @@ extern "C" mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **t
 extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
                                           mgs_error *err) {
   *out = nullptr;
+  if (half_width < 1 || half_width > 1000)
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: band half-width %d outside [1, 1000] voxels", half_width);
   const float tr = (float)t->p.truncation;
-  mgs_vdb_grid field{};
   try {
-    // Level-set-like copy: observed (weight >= min_weight) voxels active, the rest signed
-    // by flood fill from them (a closed surface's unobserved inside becomes -t).
-    auto ls = std::make_shared<FloatTree>(*t->value);
-    tree::ValueAccessor<const FloatTree> wa(*t->weight);
-    size_t inside = 0;
-    for (auto l = ls->beginLeaf(); l; ++l)
-      for (auto v = l->beginValueAll(); v; ++v) {
-        const float w = wa.getValue(v.getCoord());
-        if (w >= min_weight && w > 0) {
-          v.setValueOn(true);
-          inside += *v < 0;
-        } else {
-          v.setValueOn(false);
-          v.setValue(tr);
-        }
+    // observed (weight >= min_weight) voxels, split by sign
+    MaskTree obs(false), pos(false), neg(false);
+    {
+      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<MaskTree> oa(obs), pa(pos), na(neg);
+      for (auto it = t->weight->cbeginValueOn(); it; ++it) {
+        if (!(*it >= min_weight)) continue;
+        const Coord c = it.getCoord();
+        oa.setValueOn(c);
+        (va.getValue(c) < 0 ? na : pa).setValueOn(c);
       }
-    if (ls->activeVoxelCount() == 0)
+    }
+    if (obs.activeVoxelCount() == 0)
       return mgs_error_set(err, MGS_ERR_FORMAT, "tsdf: no voxel was observed (by %g views or more)", (double)min_weight);
-    if (inside == 0)
+    if (neg.activeVoxelCount() == 0)
       return mgs_error_set(err, MGS_ERR_FORMAT,
                            "tsdf: no observed voxel lies behind a depth: the fused volume has no surface");
-    tools::signedFloodFill(*ls);
-    // 1/2 - D/(2t): > 1/2 inside; exactly 0 at +t (outside, inactive), 1 at -t.
-    const float inv = 1.0f / (2 * tr);
-    tools::foreach(ls->beginValueAll(), [&](const FloatTree::ValueAllIter &it) {
-      const float a = 0.5f - *it * inv;
-      it.setValue(a);
-      it.setActiveState(a > 0);
-    });
-    tools::changeBackground(*ls, 0.0f);
-    auto g = FloatGrid::create(ls);
+    // The inside behind the truncation is unobserved: grow the observed inside into
+    // unobserved voxels (never through observed outside) far enough to cover the band's
+    // leaves, so no sign flips next to the band. No global flood fill: a shell left open
+    // (thin parts, unseen sides) would leak it to all of space.
+    const int grow = half_width + 9;
+    MaskTree inside(neg);
+    for (int k = 0; k < grow; k++) {
+      tools::dilateActiveValues(inside, 1, tools::NN_FACE, tools::IGNORE_TILES);
+      inside.topologyDifference(pos);
+    }
+    // Crossings count only between observed voxels: seeds must have all 6 neighbours observed.
+    MaskTree seedable(obs);
+    tools::erodeActiveValues(seedable, 1, tools::NN_FACE, tools::IGNORE_TILES);
+    // 1/2 - D/(2t) on observed voxels (> 1/2 inside), 1 on the grown inside, 0 elsewhere.
+    auto field = std::make_shared<FloatTree>(0.0f);
+    {
+      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<FloatTree> fa(*field);
+      tree::ValueAccessor<const MaskTree> ob(obs);
+      const float inv = 1.0f / (2 * tr);
+      for (auto it = obs.cbeginValueOn(); it; ++it) fa.setValue(it.getCoord(), 0.5f - va.getValue(it.getCoord()) * inv);
+      for (auto it = inside.cbeginValueOn(); it; ++it)
+        if (!ob.isValueOn(it.getCoord())) fa.setValue(it.getCoord(), 1.0f);
+    }
+    auto g = FloatGrid::create(field);
     g->setTransform(t->xf->copy());
-    g->setName("alpha");
     g->setGridClass(GRID_FOG_VOLUME);
-    field.grid = g;
+    *out = mgs_vdb_detail::wrap(mgs_vdb_detail::sdf_closest_seeded(*g, 0.5f, half_width, seedable));
   } catch (const std::exception &e) {
     return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
   }
-  mgs_vdb_sdf_params sp;
-  mgs_vdb_sdf_params_default(&sp);
-  sp.tau = 0.5;
-  sp.half_width = half_width;
-  sp.method = MGS_VDB_SDF_CLOSEST;
-  return mgs_vdb_sdf_from_alpha(&field, &sp, out, err);
+  return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: out of memory");
 }

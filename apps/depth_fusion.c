@@ -27,6 +27,7 @@ void mgs_fusion_opts_default(mgs_fusion_opts *o) {
   o->view_size = 256;
   o->iteration = -1;
   o->image_alpha = 1;
+  o->carve = 1;
 }
 
 /* ---- the 3DGS depth source ---- */
@@ -130,14 +131,16 @@ static double median_d(double *v, size_t n) {
 
 /* Renders view k into depth (masked: 0 = background); returns its foreground pixel count. */
 static mgs_status render_masked(const mgs_depth_source *src, const mgs_camera *cam, const mgs_image *mask,
-                                mgs_depth_kind kind, float amask, float *depth, float *alpha, size_t *fg, mgs_error *err) {
+                                mgs_depth_kind kind, float amask, int carve, float *depth, float *alpha, size_t *fg,
+                                mgs_error *err) {
   mgs_status st = src->render(src->ctx, cam, kind, depth, alpha, err);
   if (st != MGS_OK) return st;
   size_t np = (size_t)cam->width * cam->height, c = 0;
   int use_mask = mask && mask->width == cam->width && mask->height == cam->height;
   for (size_t p = 0; p < np; p++) {
     int bg = !(alpha[p] >= amask) || (use_mask && mask->data[p * mask->channels] < 0.5f);
-    if (bg || !(depth[p] > 0) || !isfinite(depth[p])) depth[p] = 0;
+    if (bg) depth[p] = carve ? -1.0f : 0.0f; /* background: free space (vdb/mgs_vdb_tsdf.h) */
+    else if (!(depth[p] > 0) || !isfinite(depth[p])) depth[p] = 0;
     else c++;
   }
   *fg = c;
@@ -173,7 +176,7 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   size_t nfp = 0;
   for (size_t k = 0; k < n; k++) {
     size_t fg = 0, np = (size_t)cams[k].width * cams[k].height;
-    if ((st = render_masked(src, &cams[k], masks ? masks[k] : NULL, kind, o->alpha_mask, depth, alpha, &fg, err))) goto done;
+    if ((st = render_masked(src, &cams[k], masks ? masks[k] : NULL, kind, o->alpha_mask, o->carve, depth, alpha, &fg, err))) goto done;
     if (!fg) { rep->views_empty++; continue; }
     float *d = malloc(fg * sizeof(float));
     if (!d) { st = mgs_error_set(err, MGS_ERR_NOMEM, "depth fusion: out of memory"); goto done; }
@@ -220,7 +223,7 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
     for (size_t j = 0; j < kn; j++) {
       size_t fg;
       float *d = depth + j * maxpix;
-      if ((st = render_masked(src, &cams[k0 + j], masks ? masks[k0 + j] : NULL, kind, o->alpha_mask, d, alpha, &fg, err)))
+      if ((st = render_masked(src, &cams[k0 + j], masks ? masks[k0 + j] : NULL, kind, o->alpha_mask, o->carve, d, alpha, &fg, err)))
         goto done;
       dp[j] = d;
     }

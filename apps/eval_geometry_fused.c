@@ -9,6 +9,7 @@
 #include "apps/mgs_depth_fusion.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
+#include "apps/mesh_pieces.h"
 #include "render/mgs_mesh_distance.h"
 
 #define EVAL_SAMPLES 100000
@@ -41,6 +42,8 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
     mgs_warn("eval geometry (depth-fused surface): %s", err.msg);
     goto done;
   }
+  long chi = 0;
+  size_t pieces = mgs_mesh_pieces(surf, &chi);
   if (obj) {
     cJSON_AddNumberToObject(obj, "chamfer", gm.chamfer);
     cJSON_AddNumberToObject(obj, "chamfer_accuracy", gm.accuracy);
@@ -58,15 +61,18 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
     cJSON_AddNumberToObject(obj, "truncation_footprints", rep.truncation / rep.footprint);
     cJSON_AddNumberToObject(obj, "min_weight", fo.min_weight);
     cJSON_AddNumberToObject(obj, "surface_triangles", (double)surf->nt);
+    cJSON_AddNumberToObject(obj, "surface_pieces", (double)pieces);
+    cJSON_AddNumberToObject(obj, "surface_euler", (double)chi);
     cJSON_AddNumberToObject(obj, "seconds", mgs_now() - t0);
   }
   if (table_out && table_len)
     snprintf(table_out, table_len,
              "  depth-fused surface   Chamfer %.6g (accuracy %.6g, completeness %.6g), F-score %.4f\n"
-             "                        (%zu %sviews, %s depth, voxel %.4g, truncation %.3g footprints, %zu triangles)\n",
+             "                        (%zu %sviews, %s depth, voxel %.4g, truncation %.3g footprints, %zu triangles,\n"
+             "                        %zu pieces, Euler characteristic %ld)\n",
              gm.chamfer, gm.accuracy, gm.completeness, gm.fscore, rep.views, rep.virtual_views ? "virtual " : "",
              rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.voxel_size, rep.truncation / rep.footprint,
-             surf->nt);
+             surf->nt, pieces, chi);
   rc = 0;
 done:
   mgs_mesh_destroy(surf);

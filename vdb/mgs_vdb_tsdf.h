@@ -1,6 +1,9 @@
 /* TSDF fusion of depth maps into a sparse OpenVDB grid, and the narrow-band level set of
  * its zero crossing (vdb/tsdf.cpp). Any renderer's depth maps: camera z along the optical
- * axis, 0 = no depth (masked or background), as render/mgs_render_maps.h gives them.
+ * axis, 0 = no depth (nothing known: no update), as render/mgs_render_maps.h gives them;
+ * a negative value marks a background pixel whose whole ray is free space: voxels of
+ * allocated blocks that project there take +t (space carving: the silhouettes remove the
+ * projective TSDF's blobs behind grazing surfaces; Open3D has no such value).
  *
  * Fusion follows the field's standard (KinectFusion; Open3D's ScalableTSDFVolume, which a
  * slow test compares with): only the 8^3 blocks that some pixel's ray passes within the

@@ -99,8 +99,8 @@ void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, FloatTree
       if (!(u >= 0 && u < c.width && vv >= 0 && vv < c.height)) continue;
       const int px = (int)u, py = (int)vv;
       const float d = v.depth[(size_t)py * c.width + px];
-      if (!valid_depth(d)) continue;
-      const double sdf = ((double)d - z) * ray_scale(c, px, py);
+      // d < 0: a background pixel, free space along its whole ray (carving)
+      const double sdf = d < 0 ? (double)tr : valid_depth(d) ? ((double)d - z) * ray_scale(c, px, py) : NAN;
       if (!(sdf > -tr)) continue;
       const float val = (float)std::min(sdf, (double)tr);
       const Index off = it.pos();
@@ -232,15 +232,43 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
     if (neg.activeVoxelCount() == 0)
       return mgs_error_set(err, MGS_ERR_FORMAT,
                            "tsdf: no observed voxel lies behind a depth: the fused volume has no surface");
-    // The inside behind the truncation is unobserved: grow the observed inside into
-    // unobserved voxels (never through observed outside) far enough to cover the band's
-    // leaves, so no sign flips next to the band. No global flood fill: a shell left open
-    // (thin parts, unseen sides) would leak it to all of space.
-    const int grow = half_width + 9;
-    MaskTree inside(neg);
-    for (int k = 0; k < grow; k++) {
-      tools::dilateActiveValues(inside, 1, tools::NN_FACE, tools::IGNORE_TILES);
-      inside.topologyDifference(pos);
+    // The inside behind the truncation is unobserved: fill it from the observed inside
+    // through unobserved voxels only (never through observed outside), frontier by
+    // frontier, inside the box of the observed voxels. A closed fused surface gets its
+    // whole inside; an open one (unseen sides, thin parts) lets the fill reach the box's
+    // margin, and then the inside is grown only far enough to cover the band's leaves
+    // (w + 9 voxels) with a warning: no global flood fill, which leaks to all of space.
+    CoordBBox box;
+    obs.evalActiveVoxelBoundingBox(box);
+    box.expand(1);
+    auto inside = std::make_unique<MaskTree>(neg);
+    auto front = std::make_unique<MaskTree>(neg);
+    bool open = false;
+    for (int step = 0; front->activeVoxelCount() > 0; step++) {
+      auto next = std::make_unique<MaskTree>(*front);
+      MaskTree &nx = *next;
+      tools::dilateActiveValues(nx, 1, tools::NN_FACE, tools::IGNORE_TILES);
+      nx.topologyDifference(pos);
+      nx.topologyDifference(*inside);
+      if (!open) {
+        CoordBBox nb;
+        if (nx.evalActiveVoxelBoundingBox(nb) && (nb.min().x() <= box.min().x() || nb.min().y() <= box.min().y() || nb.min().z() <= box.min().z() ||
+                              nb.max().x() >= box.max().x() || nb.max().y() >= box.max().y() || nb.max().z() >= box.max().z()))
+          open = true;
+      }
+      if (open && step >= half_width + 9) break;
+      inside->topologyUnion(nx);
+      front = std::move(next);
+    }
+    if (open) {
+      // restart: the grown part is not trusted beyond the band's reach
+      inside = std::make_unique<MaskTree>(neg);
+      for (int k = 0; k < half_width + 9; k++) {
+        tools::dilateActiveValues(*inside, 1, tools::NN_FACE, tools::IGNORE_TILES);
+        inside->topologyDifference(pos);
+      }
+      mgs_warn("tsdf: the fused surface is not closed (its inside reaches unobserved space): the inside is filled "
+               "only %d voxels deep; persistence may see a cavity", half_width + 9);
     }
     // Crossings count only between observed voxels: seeds must have all 6 neighbours observed.
     MaskTree seedable(obs);
@@ -253,7 +281,7 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
       tree::ValueAccessor<const MaskTree> ob(obs);
       const float inv = 1.0f / (2 * tr);
       for (auto it = obs.cbeginValueOn(); it; ++it) fa.setValue(it.getCoord(), 0.5f - va.getValue(it.getCoord()) * inv);
-      for (auto it = inside.cbeginValueOn(); it; ++it)
+      for (auto it = inside->cbeginValueOn(); it; ++it)
         if (!ob.isValueOn(it.getCoord())) fa.setValue(it.getCoord(), 1.0f);
     }
     auto g = FloatGrid::create(field);

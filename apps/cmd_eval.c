@@ -26,7 +26,7 @@ static void usage(FILE *f) {
     "                         alpha-field's surface and the depth-fused one (morsegs vdb RUN)\n"
     "      --no-images        do not write the side-by-side PNGs\n"
     "      --max-views N      evaluate at most N views (evenly spaced)\n"
-    "      --depth median|expected, --fuse-voxel F, --trunc F, --min-weight W, --no-carve\n"
+    "      --depth median|expected, --fuse-voxel F, --trunc F, --min-weight W, --carve\n"
     "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
     "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n");
 }
@@ -54,7 +54,7 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"max-views", required_argument, 0, 'v'}, {"help", no_argument, 0, 'h'},
                                        {"depth", required_argument, 0, 'Z'}, {"fuse-voxel", required_argument, 0, 'x'},
                                        {"trunc", required_argument, 0, 'T'}, {"min-weight", required_argument, 0, 'W'},
-                                       {"fused-only", no_argument, 0, 'F'}, {"no-carve", no_argument, 0, 'C'},
+                                       {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
                                        {0, 0, 0, 0}};
   const char *split_s = "test", *mesh = NULL;
   int iteration = -1, images = 1, max_views = 0, c, fused_only = 0;
@@ -74,7 +74,7 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'm': mesh = optarg; break;
       case 'n': images = 0; break;
       case 'F': fused_only = 1; break;
-      case 'C': fo.carve = 0; break;
+      case 'C': fo.carve = 1; break;
       case 'Z':
         if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
         else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;

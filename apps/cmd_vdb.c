@@ -38,7 +38,7 @@ static void usage(FILE *f) {
           "  --trunc F                truncation in pixel footprints (9)\n"
           "  --fuse-voxel-size H, --trunc-size T   the same in world units (override)\n"
           "  --min-weight W           views a voxel needs to count as observed (1)\n"
-          "  --no-carve               background pixels leave voxels alone (default: free space)\n"
+          "  --carve                  background pixels carve free space (off: it erodes surfaces)\n"
           "  --resolution R           voxels along the diagonal of the means' bounding box (256)\n"
           "  --voxel-size H           absolute voxel size (overrides --resolution)\n"
           "  --tau T                  iso value of the surface {A = T} (0.5)\n"
@@ -80,7 +80,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"views", required_argument, 0, 'V'},      {"depth", required_argument, 0, 'Z'},
       {"fuse-voxel", required_argument, 0, 'x'}, {"trunc", required_argument, 0, 'T'},
       {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
-      {"min-weight", required_argument, 0, 'W'}, {"no-carve", no_argument, 0, 'C'},
+      {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
       {"help", no_argument, 0, 'H'},              {0, 0, 0, 0}};
   const char *out = NULL, *mesh_out = NULL;
   mgs_vdb_alpha_params ap;
@@ -155,7 +155,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
         ap.memory_budget = v * 1e9;
         break;
       case 'D': from_depth = 1; break;
-      case 'C': fo.carve = 0; break;
+      case 'C': fo.carve = 1; break;
       case 'A': from_alpha = 1; break;
       case 'N': no_alpha = 1; break;
       case 'I': case 'V':

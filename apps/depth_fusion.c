@@ -27,7 +27,7 @@ void mgs_fusion_opts_default(mgs_fusion_opts *o) {
   o->view_size = 256;
   o->iteration = -1;
   o->image_alpha = 1;
-  o->carve = 1;
+  o->carve = 0; /* measured: +t at every pixel outside the rendered silhouette erodes every surface seen at grazing angles (genus2 Chamfer 0.0040 -> 0.023) */
 }
 
 /* ---- the 3DGS depth source ---- */

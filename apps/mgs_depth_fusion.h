@@ -43,7 +43,7 @@ typedef struct mgs_fusion_opts {
   int view_size;             /* their image side, px (256) */
   int iteration;             /* run folder: point_cloud/iteration_N (-1: latest) */
   int image_alpha;           /* use the dataset images' alpha as masks when available (1) */
-  int carve;                 /* background pixels carve free space (1; vdb/mgs_vdb_tsdf.h) */
+  int carve;                 /* background pixels carve free space (0: it erodes; docs/notes-depth-fusion.md) */
 } mgs_fusion_opts;
 void mgs_fusion_opts_default(mgs_fusion_opts *o);
 

@@ -52,12 +52,14 @@ mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vd
 
 /* The level set "sdf" of the fused zero crossing, valid as the α-field's (mgs_vdb.h,
  * CLOSEST: every neighbour pair within one voxel). Voxels seen by at least min_weight
- * views keep their fused value D; the unobserved inside behind the truncation is grown
- * from the observed inside through unobserved voxels only (w + 9 voxels: the band's leaves;
- * no global flood fill, which an open shell leaks to all of space); the field
- * 1/2 - D/(2t) (1 on the grown inside, 0 elsewhere) goes through the CLOSEST construction
- * at tau = 1/2 with seeds only where all 6 neighbours were observed, so the band holds
- * distances to the fused zero crossing and nothing else. Empty fused volume or no
+ * views keep their fused value D; the unobserved inside behind the truncation is filled
+ * from the observed inside through unobserved voxels only, within the observed box (a
+ * closed surface's whole inside; w + 9 voxels with a warning when the fill reaches the
+ * box: no global flood fill, which an open shell leaks to all of space); the field
+ * 1/2 - D/(2t) (1 on the filled inside, 0 elsewhere) goes through the CLOSEST construction
+ * at tau = 1/2, so the band holds distances to the fused zero crossing (and to the edge
+ * of an open shell's limited fill, which then is a surface too: never a sign flip
+ * without a distance). Empty fused volume or no
  * surface: MGS_ERR_FORMAT. */
 mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
                                mgs_error *err);

@@ -327,9 +327,7 @@ template <class Tree, class F> void for_each_on(Tree &m, const F &f) {
 
 // The band's leaves, trimmed, before the flood fill of the tiles above them and pruning
 // (sdf_finish): the incremental build (sdf_update) splices these.
-// seedable (may be null): only its voxels may be seeds (a fused TSDF's observed voxels with
-// all 6 neighbours observed: crossings against unobserved space are not surfaces).
-FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w, const MaskTree *seedable = nullptr) {
+FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   const FloatTree &at = alpha.tree();
   const float bg = (float)(w * alpha.voxelSize()[0]);
   const float h = (float)alpha.voxelSize()[0];
@@ -358,7 +356,6 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w, const M
         l.setValueOff(v.pos());
     }
   });
-  if (seedable) seeds.topologyIntersection(*seedable);
   tools::pruneInactive(seeds);
   // The whole band: voxels within Chebyshev distance w of a seed hold every voxel closer
   // than w to a resolved surface (its closest point lies in a cell with a seed corner).
@@ -679,13 +676,6 @@ FloatTree::Ptr sdf_update(const FloatGrid &alpha, float tau, int w, bool sweep, 
 }
 
 }  // namespace
-
-FloatGrid::Ptr mgs_vdb_detail::sdf_closest_seeded(const FloatGrid &alpha, float tau, int w, const MaskTree &seedable) {
-  auto g = sdf_finish(sdf_closest_raw(alpha, tau, w, &seedable), alpha);
-  g->setName("sdf");
-  g->setGridClass(GRID_LEVEL_SET);
-  return g;
-}
 
 // The last build of mgs_vdb_sdf_from_alpha_cached: its α-field (shared, never written) and
 // raw band, and the parameters they were made with.

@@ -270,9 +270,6 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
       mgs_warn("tsdf: the fused surface is not closed (its inside reaches unobserved space): the inside is filled "
                "only %d voxels deep; persistence may see a cavity", half_width + 9);
     }
-    // Crossings count only between observed voxels: seeds must have all 6 neighbours observed.
-    MaskTree seedable(obs);
-    tools::erodeActiveValues(seedable, 1, tools::NN_FACE, tools::IGNORE_TILES);
     // 1/2 - D/(2t) on observed voxels (> 1/2 inside), 1 on the grown inside, 0 elsewhere.
     auto field = std::make_shared<FloatTree>(0.0f);
     {
@@ -287,9 +284,17 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
     auto g = FloatGrid::create(field);
     g->setTransform(t->xf->copy());
     g->setGridClass(GRID_FOG_VOLUME);
-    *out = mgs_vdb_detail::wrap(mgs_vdb_detail::sdf_closest_seeded(*g, 0.5f, half_width, seedable));
+    mgs_vdb_grid a;
+    a.grid = g;
+    // Every crossing of this field is seeded (a blob's or an open fill's too: they become
+    // surfaces, not sign flips without distances), so the band is valid everywhere.
+    mgs_vdb_sdf_params sp;
+    mgs_vdb_sdf_params_default(&sp);
+    sp.tau = 0.5;
+    sp.half_width = half_width;
+    sp.method = MGS_VDB_SDF_CLOSEST;
+    return mgs_vdb_sdf_from_alpha(&a, &sp, out, err);
   } catch (const std::exception &e) {
     return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
   }
-  return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: out of memory");
 }

@@ -21,9 +21,6 @@ namespace mgs_vdb_detail {
 void init();
 mgs_vdb_grid *wrap(openvdb::FloatGrid::Ptr g);
 openvdb::math::Transform::Ptr make_transform(double voxel_size, const double t[3]);
-// The CLOSEST level set of {alpha = tau} (sdf.cpp) with seeds only in `seedable` (tsdf.cpp).
-openvdb::FloatGrid::Ptr sdf_closest_seeded(const openvdb::FloatGrid &alpha, float tau, int w,
-                                           const openvdb::MaskTree &seedable);
 // Runs f(b, e) over [begin, end) through mgs_parallel_for.
 template <class F> void parallel_for(size_t begin, size_t end, size_t grain, const F &f);
 }  // namespace mgs_vdb_detail

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <cjson/cJSON.h>
 #include "apps/mgs_cli.h"
+#include "apps/mgs_depth_fusion.h"
 #include "apps/mgs_eval_geometry.h"
 #include "core/mgs_core.h"
 #include "render/mgs_loss.h"
@@ -21,9 +22,13 @@ static void usage(FILE *f) {
     "usage: morsegs eval RUN [options]\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --split S          test (default), val or train\n"
-    "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply)\n"
+    "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply): the\n"
+    "                         alpha-field's surface and the depth-fused one (morsegs vdb RUN)\n"
     "      --no-images        do not write the side-by-side PNGs\n"
-    "      --max-views N      evaluate at most N views (evenly spaced)\n");
+    "      --max-views N      evaluate at most N views (evenly spaced)\n"
+    "      --depth median|expected, --fuse-voxel F, --trunc F, --min-weight W, --carve\n"
+    "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
+    "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n");
 }
 
 static double read_train_seconds(const char *run, int *iterations) {
@@ -47,9 +52,14 @@ int mgs_cmd_eval(int argc, char **argv) {
   static const struct option opts[] = {{"iteration", required_argument, 0, 'i'}, {"split", required_argument, 0, 's'},
                                        {"mesh", required_argument, 0, 'm'}, {"no-images", no_argument, 0, 'n'},
                                        {"max-views", required_argument, 0, 'v'}, {"help", no_argument, 0, 'h'},
+                                       {"depth", required_argument, 0, 'Z'}, {"fuse-voxel", required_argument, 0, 'x'},
+                                       {"trunc", required_argument, 0, 'T'}, {"min-weight", required_argument, 0, 'W'},
+                                       {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
                                        {0, 0, 0, 0}};
   const char *split_s = "test", *mesh = NULL;
-  int iteration = -1, images = 1, max_views = 0, c;
+  int iteration = -1, images = 1, max_views = 0, c, fused_only = 0;
+  mgs_fusion_opts fo;
+  mgs_fusion_opts_default(&fo);
   optind = 1;
   while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
     switch (c) {
@@ -63,6 +73,20 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 's': split_s = optarg; break;
       case 'm': mesh = optarg; break;
       case 'n': images = 0; break;
+      case 'F': fused_only = 1; break;
+      case 'C': fo.carve = 1; break;
+      case 'Z':
+        if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
+        else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;
+        else { fprintf(stderr, "morsegs eval: --depth '%s': expected median or expected\n", optarg); return 2; }
+        break;
+      case 'x': case 'T': case 'W': {
+        char *end;
+        double v = strtod(optarg, &end);
+        if (!*optarg || *end || !(v > 0) || v > 1e6) { fprintf(stderr, "morsegs eval: '%s' must be a positive number\n", optarg); return 2; }
+        if (c == 'x') fo.voxel_fp = v; else if (c == 'T') fo.trunc_fp = v; else fo.min_weight = (float)v;
+        break;
+      }
       case 'h': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
@@ -164,10 +188,22 @@ int mgs_cmd_eval(int argc, char **argv) {
     snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", it);
     char *ply = mgs_path_join(run, sub);
     cJSON *geo = cJSON_CreateObject();
-    int grc = mgs_eval_geometry(ply, gt_mesh, geo, table, sizeof table);
+    int grc = fused_only ? 0 : mgs_eval_geometry(ply, gt_mesh, geo, table, sizeof table);
     free(ply);
-    if (grc == 0) cJSON_AddItemToObject(res, "geometry", geo);
-    else {
+    if (grc == 0) {
+      /* the depth-fused surface beside the α-field's (geometry.fused) */
+      cJSON *fused = cJSON_CreateObject();
+      size_t used = strlen(table);
+      fo.iteration = it;
+      if (mgs_eval_geometry_fused(run, &fo, gt_mesh, fused, table + used, sizeof table - used) == 0)
+        cJSON_AddItemToObject(geo, "fused", fused);
+      else {
+        cJSON_Delete(fused);
+        table[used] = 0;
+        fprintf(stderr, "morsegs eval: note: the depth-fused surface's geometry skipped (the fusion failed)\n");
+      }
+      cJSON_AddItemToObject(res, "geometry", geo);
+    } else {
       cJSON_Delete(geo);
       table[0] = 0;
       fprintf(stderr, "morsegs eval: note: geometry metrics against %s skipped (the geometry evaluation failed)\n",

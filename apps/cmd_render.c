@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "apps/mgs_cli.h"
+#include "apps/mgs_render_maps_io.h"
 #include "core/mgs_core.h"
 #include "render/mgs_raster.h"
 #include "train/mgs_train.h"
@@ -17,7 +18,12 @@ static void usage(FILE *f) {
     "  -o, --output DIR       folder for the PNGs (one per view, named after it)\n"
     "      --split S          train, val, test (default) or all\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
-    "      --force            write into a non-empty DIR\n");
+    "      --force            write into a non-empty DIR\n"
+    "      --depth            also NAME_depth_expected.exr, NAME_depth_median.exr (camera z, 0 = background)\n"
+    "                         and NAME_depth.png (colour-mapped median depth, near = red)\n"
+    "      --depth-png16 S    depth maps as 16-bit PNGs of depth * S instead of EXR\n"
+    "      --normal           also NAME_normal.exr (sum of w n, world space) and NAME_normal.png\n"
+    "      --alpha            also NAME_alpha.png (16-bit)\n");
 }
 
 static int dir_nonempty(const char *dir) {
@@ -34,9 +40,12 @@ static int dir_nonempty(const char *dir) {
 int mgs_cmd_render(int argc, char **argv) {
   static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"split", required_argument, 0, 's'},
                                        {"iteration", required_argument, 0, 'i'}, {"force", no_argument, 0, 'f'},
+                                       {"depth", no_argument, 0, 'D'}, {"normal", no_argument, 0, 'N'},
+                                       {"alpha", no_argument, 0, 'A'}, {"depth-png16", required_argument, 0, 'P'},
                                        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   const char *out = NULL, *split = "test";
   int iteration = -1, force = 0, c;
+  mgs_maps_io_opts mo = {0, 0, 0, 0, 1000.0};
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     switch (c) {
@@ -50,6 +59,19 @@ int mgs_cmd_render(int argc, char **argv) {
         break;
       }
       case 'f': force = 1; break;
+      case 'D': mo.depth = 1; break;
+      case 'N': mo.normal = 1; break;
+      case 'A': mo.alpha = 1; break;
+      case 'P': {
+        char *end;
+        mo.depth_scale = strtod(optarg, &end);
+        if (!*optarg || *end || !(mo.depth_scale > 0) || mo.depth_scale > 1e9) {
+          fprintf(stderr, "morsegs render: --depth-png16 needs a positive scale\n");
+          return 2;
+        }
+        mo.png16 = mo.depth = 1;
+        break;
+      }
       case 'h': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
@@ -107,6 +129,13 @@ int mgs_cmd_render(int argc, char **argv) {
       free(path);
       mgs_image_destroy(img);
       if (st) goto done;
+      if (mo.depth || mo.normal || mo.alpha) {
+        mgs_render_maps maps;
+        unsigned which = (mo.depth ? MGS_MAP_DEPTH_EXPECTED | MGS_MAP_DEPTH_MEDIAN : 0) | (mo.normal ? MGS_MAP_NORMAL : 0);
+        name[strlen(name) - 4] = 0; /* without .png */
+        if ((st = mgs_raster_maps(r, which, &maps, &err)) || (st = mgs_write_render_maps(out, name, &maps, &mo, &err)))
+          goto done;
+      }
       written++;
     }
   printf("rendered %zu views of %s (iteration %d, %zu Gaussians) into %s\n", written, run, it, g->n, out);

@@ -2,13 +2,19 @@
  *   density  fog volume: the α-field clamped to [0,1] (0 outside; what the splats define)
  *   sdf      level set of {A = τ}: negative inside, world units, band ±W voxels
  * plus file metadata (tool, version, tau, voxel_size, source) and, with --mesh, the zero
- * level set as a PLY/OBJ mesh. Never overwrites without --force. */
+ * level set as a PLY/OBJ mesh. Never overwrites without --force.
+ * morsegs vdb RUN -o OUT.vdb (a run folder), or --from-depth: the SDF from the model's
+ * rendered depth fused at the run's cameras (apps/mgs_depth_fusion.h) is `sdf` (the first
+ * level set: what `persistence` and --mesh take), with the fusion's `tsdf` and
+ * `tsdf_weight`, and the α-field's grids beside it as `density` and `sdf_alpha`
+ * (docs/notes-depth-fusion.md: why this is the default for run folders). */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "apps/mgs_cli.h"
+#include "apps/mgs_depth_fusion.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
@@ -17,8 +23,22 @@
 
 static void usage(FILE *f) {
   fprintf(f,
-          "usage: morsegs vdb SCENE.ply -o OUT.vdb [options]\n"
+          "usage: morsegs vdb SCENE.ply|RUN -o OUT.vdb [options]\n"
           "  -o, --output OUT.vdb     output file (grids 'density' and 'sdf')\n"
+          "  SCENE.ply: the alpha-field's surface (density, sdf); RUN (a run folder): the surface\n"
+          "  of the rendered depth fused at RUN/cameras.json as sdf (tsdf, tsdf_weight beside it)\n"
+          "  plus the alpha-field's as density and sdf_alpha\n"
+          "  --from-depth             depth fusion also for a bare .ply (virtual views)\n"
+          "  --from-alpha             the alpha-field's surface only, also for a run folder\n"
+          "  --no-alpha               depth fusion without the alpha-field's grids\n"
+          "  --iteration N            run folder: point_cloud/iteration_N (default: the latest)\n"
+          "  --views N                virtual views when there is no cameras.json (64)\n"
+          "  --depth median|expected  depth map fused (default: the model's, median for 3DGS)\n"
+          "  --fuse-voxel F           fusion voxel size in pixel footprints of the views (1)\n"
+          "  --trunc F                truncation in pixel footprints (9)\n"
+          "  --fuse-voxel-size H, --trunc-size T   the same in world units (override)\n"
+          "  --min-weight W           views a voxel needs to count as observed (1)\n"
+          "  --carve                  background pixels carve free space (off: it erodes surfaces)\n"
           "  --resolution R           voxels along the diagonal of the means' bounding box (256)\n"
           "  --voxel-size H           absolute voxel size (overrides --resolution)\n"
           "  --tau T                  iso value of the surface {A = T} (0.5)\n"
@@ -55,6 +75,12 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"mesh", required_argument, 0, 'm'},        {"adaptivity", required_argument, 0, 'a'},
       {"force", no_argument, 0, 'f'},             {"small", required_argument, 0, 's'},
       {"sdf-method", required_argument, 0, 'M'},  {"mem-budget", required_argument, 0, 'B'},
+      {"from-depth", no_argument, 0, 'D'},       {"from-alpha", no_argument, 0, 'A'},
+      {"no-alpha", no_argument, 0, 'N'},         {"iteration", required_argument, 0, 'I'},
+      {"views", required_argument, 0, 'V'},      {"depth", required_argument, 0, 'Z'},
+      {"fuse-voxel", required_argument, 0, 'x'}, {"trunc", required_argument, 0, 'T'},
+      {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
+      {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
       {"help", no_argument, 0, 'H'},              {0, 0, 0, 0}};
   const char *out = NULL, *mesh_out = NULL;
   mgs_vdb_alpha_params ap;
@@ -62,7 +88,9 @@ int mgs_cmd_vdb(int argc, char **argv) {
   mgs_vdb_sdf_params sp;
   mgs_vdb_sdf_params_default(&sp);
   double adaptivity = 0, v = 0;
-  int force = 0, c;
+  int force = 0, c, from_depth = 0, from_alpha = 0, no_alpha = 0;
+  mgs_fusion_opts fo;
+  mgs_fusion_opts_default(&fo);
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:", opts, NULL)) != -1) {
     switch (c) {
@@ -126,16 +154,48 @@ int mgs_cmd_vdb(int argc, char **argv) {
         }
         ap.memory_budget = v * 1e9;
         break;
+      case 'D': from_depth = 1; break;
+      case 'C': fo.carve = 1; break;
+      case 'A': from_alpha = 1; break;
+      case 'N': no_alpha = 1; break;
+      case 'I': case 'V':
+        if (!parse_double(optarg, &v) || v < (c == 'V') || v > 1e6 || v != floor(v)) {
+          fprintf(stderr, "morsegs vdb: --%s '%s' must be an integer%s\n", c == 'V' ? "views" : "iteration", optarg,
+                  c == 'V' ? " in [1, 1e6]" : " >= 0");
+          return 2;
+        }
+        if (c == 'V') fo.views = (int)v; else fo.iteration = (int)v;
+        break;
+      case 'Z':
+        if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
+        else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;
+        else { fprintf(stderr, "morsegs vdb: --depth '%s': expected median or expected\n", optarg); return 2; }
+        break;
+      case 'x': case 'T': case 'X': case 'S': case 'W': {
+        double *dst = c == 'x' ? &fo.voxel_fp : c == 'T' ? &fo.trunc_fp : c == 'X' ? &fo.voxel_size : c == 'S' ? &fo.truncation : NULL;
+        if (!parse_double(optarg, &v) || !(v > 0) || v > 1e9) {
+          fprintf(stderr, "morsegs vdb: '%s' must be a positive number\n", optarg);
+          return 2;
+        }
+        if (dst) *dst = v; else fo.min_weight = (float)v;
+        break;
+      }
       case 'H': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
   }
+  if (from_alpha && (from_depth || no_alpha)) {
+    fprintf(stderr, "morsegs vdb: --from-alpha excludes --from-depth and --no-alpha\n");
+    return 2;
+  }
   if (optind != argc - 1 || !out) {
-    fprintf(stderr, "morsegs vdb: %s\n", !out ? "missing -o OUT.vdb" : "expected exactly one SCENE.ply");
+    fprintf(stderr, "morsegs vdb: %s\n", !out ? "missing -o OUT.vdb" : "expected exactly one SCENE.ply or RUN folder");
     usage(stderr);
     return 2;
   }
-  const char *in = argv[optind];
+  const char *in_arg = argv[optind];
+  fo.half_width = sp.half_width;
+  const int fuse = !from_alpha && (from_depth || mgs_is_dir(in_arg));
   if (mesh_out) {
     const char *ext = strrchr(mesh_out, '.');
     if (!ext || (strcmp(ext, ".ply") && strcmp(ext, ".obj"))) {
@@ -154,11 +214,26 @@ int mgs_cmd_vdb(int argc, char **argv) {
   }
 
   mgs_gaussians *g = NULL;
-  mgs_vdb_grid *alpha = NULL, *sdf = NULL, *density = NULL;
+  mgs_vdb_grid *alpha = NULL, *sdf = NULL, *density = NULL, *fsdf = NULL, *tsdf = NULL, *weight = NULL;
   mgs_mesh *mesh = NULL;
   mgs_vdb_build_info info;
+  memset(&info, 0, sizeof info);
+  mgs_fusion_report rep;
+  memset(&rep, 0, sizeof rep);
   int rc = 1;
   const double t0 = mgs_now();
+  char *in = mgs_fusion_model_path(in_arg, fo.iteration, &err);
+  if (!in) goto done;
+  if (fuse) {
+    if (mgs_fuse_path(in_arg, &fo, &fsdf, &tsdf, &weight, &rep, &err) != MGS_OK) { name_input(&err, in_arg); goto done; }
+    mgs_info("depth fusion: %zu %sviews (%zu masked by their image's alpha), %s depth, footprint %.4g, voxel %.4g, "
+             "truncation %.4g (%.3g footprints), %zu blocks, %zu voxels observed, sdf band %zu voxels, %.2f s",
+             rep.views, rep.virtual_views ? "virtual " : "", rep.image_masks, rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected",
+             rep.footprint, rep.voxel_size, rep.truncation, rep.truncation / rep.footprint, rep.blocks, rep.observed,
+             rep.band_voxels, rep.seconds);
+    if (mesh_out && mgs_vdb_extract_mesh(fsdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in_arg); goto done; }
+    if (no_alpha) goto write;
+  }
   if (mgs_ply_read_gaussians_local(in, NULL, &g, &err) != MGS_OK) goto done; /* far models: a local frame, g->origin */
   if (mgs_vdb_check_gaussians(g, in, &err) != MGS_OK) goto done;
   if (mgs_vdb_alpha_field(g, &ap, &alpha, &info, &err) != MGS_OK) { name_input(&err, in); goto done; }
@@ -174,31 +249,52 @@ int mgs_cmd_vdb(int argc, char **argv) {
   if (mgs_vdb_density_from_alpha(alpha, &density, &err) != MGS_OK) goto done;
   for (int k = 0; k < 2; k++) mgs_vdb_grid_translate(k ? sdf : density, g->origin); /* world coordinates */
   /* The mesh first, so a failure (e.g. no surface) leaves no output at all. */
-  if (mesh_out && mgs_vdb_extract_mesh(sdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in); goto done; }
+  if (!fuse && mesh_out && mgs_vdb_extract_mesh(sdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in); goto done; }
   mgs_vdb_grid_destroy(alpha);
   alpha = NULL;
+write:
   {
     mgs_vdb_file_meta meta;
     mgs_vdb_file_meta_default(&meta);
-    meta.tau = sp.tau;
-    meta.voxel_size = info.voxel_size;
-    snprintf(meta.source, sizeof meta.source, "%s", in);
-    const mgs_vdb_grid *grids[2] = {density, sdf};
-    if (mgs_vdb_write(out, grids, 2, NULL, 0, &meta, &err) != MGS_OK) goto done;
+    meta.tau = fuse ? NAN : sp.tau;
+    meta.voxel_size = fuse ? rep.voxel_size : info.voxel_size;
+    snprintf(meta.source, sizeof meta.source, "%s", fuse ? in_arg : in);
+    const mgs_vdb_grid *grids[5];
+    size_t ng = 0;
+    if (fuse) {
+      grids[ng++] = fsdf; /* first: the level set persistence and viewers pick */
+      grids[ng++] = tsdf;
+      grids[ng++] = weight;
+      if (sdf) mgs_vdb_grid_set_name(sdf, "sdf_alpha");
+    }
+    if (density) grids[ng++] = density;
+    if (sdf) grids[ng++] = sdf;
+    if (mgs_vdb_write(out, grids, ng, NULL, 0, &meta, &err) != MGS_OK) goto done;
   }
   if (mesh) {
     if (mgs_mesh_write(mesh_out, mesh, &err) != MGS_OK) goto done;
     mgs_info("mesh: %zu vertices, %zu triangles -> %s", mesh->nv, mesh->nt, mesh_out);
   }
-  printf("%s: density %zu + sdf %zu active voxels, voxel size %g, tau %g, %.2f s, peak RSS %.1f MiB\n", out,
-         mgs_vdb_grid_active_voxel_count(density), mgs_vdb_grid_active_voxel_count(sdf), info.voxel_size, sp.tau,
-         mgs_now() - t0, mgs_peak_rss() / 1048576.0);
+  if (fuse)
+    printf("%s: sdf (depth fusion of %zu %sviews, %s depth) %zu active voxels, voxel size %g, truncation %g (%.3g pixel "
+           "footprints)%s, %.2f s, peak RSS %.1f MiB\n", out, rep.views, rep.virtual_views ? "virtual " : "",
+           rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.band_voxels, rep.voxel_size, rep.truncation,
+           rep.truncation / rep.footprint, sdf ? "; alpha-field: density, sdf_alpha" : "", mgs_now() - t0,
+           mgs_peak_rss() / 1048576.0);
+  else
+    printf("%s: density %zu + sdf %zu active voxels, voxel size %g, tau %g, %.2f s, peak RSS %.1f MiB\n", out,
+           mgs_vdb_grid_active_voxel_count(density), mgs_vdb_grid_active_voxel_count(sdf), info.voxel_size, sp.tau,
+           mgs_now() - t0, mgs_peak_rss() / 1048576.0);
   rc = 0;
 done:
   mgs_mesh_destroy(mesh);
   mgs_vdb_grid_destroy(alpha);
   mgs_vdb_grid_destroy(sdf);
   mgs_vdb_grid_destroy(density);
+  mgs_vdb_grid_destroy(fsdf);
+  mgs_vdb_grid_destroy(tsdf);
+  mgs_vdb_grid_destroy(weight);
   mgs_gaussians_destroy(g);
+  free(in);
   return rc ? mgs_cli_fail("vdb", &err) : 0;
 }

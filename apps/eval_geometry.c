@@ -14,6 +14,7 @@
 #include <string.h>
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
+#include "apps/mesh_pieces.h"
 #include "core/mgs_ply.h"
 #include "render/mgs_mesh_distance.h"
 #include "vdb/mgs_vdb.h"
@@ -119,17 +120,24 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
     cJSON_AddNumberToObject(obj, "surface_tau", EVAL_TAU);
     cJSON_AddNumberToObject(obj, "surface_voxel_size", info.voxel_size);
     cJSON_AddNumberToObject(obj, "surface_triangles", surf ? (double)surf->nt : 0.0);
+    if (surf) {
+      long chi = 0;
+      cJSON_AddNumberToObject(obj, "surface_pieces", (double)mgs_mesh_pieces(surf, &chi));
+      cJSON_AddNumberToObject(obj, "surface_euler", (double)chi);
+    }
     cJSON_AddNumberToObject(obj, "geometry_seconds", mgs_now() - t0);
   }
+  long chi = 0;
+  size_t pieces = surf ? mgs_mesh_pieces(surf, &chi) : 0;
   if (table_out && table_len) {
     if (have_surface)
       snprintf(table_out, table_len,
                "  Chamfer distance      %.6g  (accuracy %.6g, completeness %.6g)\n"
                "  F-score @ %.4g        %.4f  (precision %.4f, recall %.4f; threshold = 1%% of GT diagonal)\n"
                "  floaters (H2)         %ld of %zu Gaussians (opacity < 0.01 and > 3 sigma from GT)\n"
-               "  surface               {A = %.2g}, voxel %.4g, %zu triangles\n",
+               "  surface               {A = %.2g} (alpha-field), voxel %.4g, %zu triangles, %zu pieces, Euler characteristic %ld\n",
                gm.chamfer, gm.accuracy, gm.completeness, thr, gm.fscore, gm.precision, gm.recall, floaters, g->n,
-               EVAL_TAU, info.voxel_size, surf ? surf->nt : 0);
+               EVAL_TAU, info.voxel_size, surf ? surf->nt : 0, pieces, chi);
     else
       snprintf(table_out, table_len,
                "  Chamfer distance      n/a (no surface: the alpha field never reaches %.2g)\n"

@@ -12,4 +12,10 @@
 
 int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
                       size_t table_len);
+/* The same for the surface of the model's depth fused at the run's cameras
+ * (apps/eval_geometry_fused.c; `morsegs vdb RUN`'s default): Chamfer, F-score and the
+ * fusion's settings into the object; a note on stderr and non-zero when it fails. */
+typedef struct mgs_fusion_opts mgs_fusion_opts;
+int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, const char *gt_mesh_path,
+                            void *cjson_object_out, char *table_out, size_t table_len);
 #endif

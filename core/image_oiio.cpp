@@ -116,7 +116,20 @@ extern "C" mgs_status mgs_image_read_size(const char *path, int *width, int *hei
   return MGS_OK;
 }
 
+namespace {
+mgs_status write_image(const char *path, const mgs_image *img, bool u16, mgs_error *err);
+}
+
 extern "C" mgs_status mgs_image_write(const char *path, const mgs_image *img, mgs_error *err) {
+  return write_image(path, img, false, err);
+}
+
+extern "C" mgs_status mgs_image_write_u16(const char *path, const mgs_image *img, mgs_error *err) {
+  return write_image(path, img, true, err);
+}
+
+namespace {
+mgs_status write_image(const char *path, const mgs_image *img, bool u16, mgs_error *err) {
   if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels <= 0)
     return mgs_error_set(err, MGS_ERR_ARG, "%s: no image to write", path);
   init_oiio_once();
@@ -124,7 +137,8 @@ extern "C" mgs_status mgs_image_write(const char *path, const mgs_image *img, mg
   auto out = ImageOutput::create(p);
   if (!out) return mgs_error_set(err, MGS_ERR_ARG, "%s: no image writer for this extension", path);
   const bool is_float = ext == "exr" || ext == "hdr" || ext == "tif" || ext == "tiff";
-  ImageSpec spec(img->width, img->height, img->channels, is_float ? TypeDesc::FLOAT : TypeDesc::UINT8);
+  ImageSpec spec(img->width, img->height, img->channels,
+                 is_float ? TypeDesc::FLOAT : u16 ? TypeDesc::UINT16 : TypeDesc::UINT8);
   if (img->channels == 4) spec.alpha_channel = 3;
   spec.attribute("oiio:UnassociatedAlpha", 1);
   std::string tmp = temp_name(p);
@@ -147,3 +161,4 @@ extern "C" mgs_status mgs_image_write(const char *path, const mgs_image *img, mg
   }
   return MGS_OK;
 }
+}  // namespace

@@ -51,6 +51,10 @@ double mgs_camera_fovx(const mgs_camera *cam);
 double mgs_camera_fovy(const mgs_camera *cam);
 /* Look-at pose: camera at eye looking at target with world up vector. */
 void mgs_camera_look_at(mgs_camera *cam, const double eye[3], const double target[3], const double up[3]);
+/* RUN/cameras.json of the reference 3DGS layout (core/camera_json.c): *out malloc'd
+ * (free()), in file order; names (may be NULL): the img_name of each, malloc'd strings in
+ * a malloc'd array. Errors name the file and the camera. */
+mgs_status mgs_cameras_read_json(const char *path, mgs_camera **out, char ***names, size_t *n, mgs_error *err);
 
 #ifdef __cplusplus
 }

@@ -28,6 +28,9 @@ mgs_status mgs_image_read_size(const char *path, int *width, int *height, int *c
  * as PIL gives the reference. Atomic: writes a temporary file beside `path` (keeping its
  * extension) and renames it; thread-safe. */
 mgs_status mgs_image_write(const char *path, const mgs_image *img, mgs_error *err);
+/* The same with 16 bits per channel for formats that have them (.png: values in [0,1]
+ * scaled to 0..65535, clamped and rounded); float formats as mgs_image_write. */
+mgs_status mgs_image_write_u16(const char *path, const mgs_image *img, mgs_error *err);
 
 /* RGBA -> RGB composited over background bg (straight alpha). */
 mgs_image *mgs_image_composite(const mgs_image *rgba, const float bg[3]);

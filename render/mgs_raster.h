@@ -32,6 +32,7 @@
 #include "core/mgs_error.h"
 #include "core/mgs_gaussians.h"
 #include "core/mgs_camera.h"
+#include "render/mgs_render_maps.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -89,6 +90,13 @@ mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_c
 mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
                                    const mgs_raster_settings *s, const uint32_t *idx, size_t n_idx,
                                    mgs_raster_output *out, mgs_error *err);
+
+/* The geometry maps (render/mgs_render_maps.h) of the last forward on this context, those
+ * in `which` (MGS_MAP_* flags; alpha always): expected depth from the forward's own sum
+ * of w z; median depth and normals by one more pass over the forward's tile lists with
+ * its alpha decisions, so a forward that is not followed by this call costs nothing more.
+ * The forward's model must be unchanged. Valid until the next forward on this context. */
+mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, mgs_error *err);
 
 /* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
  * Gradients are ADDED into `grad` (a model with the same n; its groups are used as

@@ -78,6 +78,11 @@ struct mgs_raster {
   float *out_color, *out_alpha, *out_depth, *final_T;
   int32_t *n_contrib;
 
+  /* geometry maps (raster_maps.c), allocated on the first request only */
+  size_t cap_map_n, cap_map_pix;
+  float *map_gnormal;      /* per Gaussian: unit normal facing the camera (3) */
+  float *map_expected, *map_median, *map_normal;
+
   /* statistics of the last calls (benchmark) */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
   mgs_raster_profile prof;
@@ -113,6 +118,7 @@ void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const floa
 double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
+mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
 
 /* The forward's per-pixel evaluation, shared so forward and backward agree bit for bit. */
 #define MGS_ALPHA_MIN (1.0f / 255.0f)

@@ -10,6 +10,8 @@
  *   .vdb files ................. read / write with file metadata, atomic (vdb_io.cpp)
  *   critical points ............ PointDataGrid "critical" (points.cpp)
  *   mesh extraction ............ zero level set -> mgs_mesh (mesh_extract.cpp)
+ *   TSDF fusion ................ depth maps -> sparse TSDF + weights -> valid level set of its
+ *                                zero crossing (tsdf.cpp, vdb/mgs_vdb_tsdf.h)
  *
  * Threading: builders run in parallel through TBB (the scheduler mgs_parallel_for uses).
  * Read-only calls on one grid (views, values, sampling) may run concurrently; any call

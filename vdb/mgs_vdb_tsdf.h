@@ -1,0 +1,70 @@
+/* TSDF fusion of depth maps into a sparse OpenVDB grid, and the narrow-band level set of
+ * its zero crossing (vdb/tsdf.cpp). Any renderer's depth maps: camera z along the optical
+ * axis, 0 = no depth (nothing known: no update), as render/mgs_render_maps.h gives them;
+ * a negative value marks a background pixel whose whole ray is free space: voxels of
+ * allocated blocks that project there take +t (space carving: the silhouettes remove the
+ * projective TSDF's blobs behind grazing surfaces; Open3D has no such value).
+ *
+ * Fusion follows the field's standard (KinectFusion; Open3D's ScalableTSDFVolume, which a
+ * slow test compares with): only the 8^3 blocks that some pixel's ray passes within the
+ * truncation t of its depth are allocated; a voxel at camera depth z that projects onto
+ * pixel (u, v) with depth d > 0 and d - z > -t along the ray (d - z times the ray's length
+ * per unit z) takes min(d - z, t) into a running average with weight 1 per view. Values
+ * are world units. Integration is parallel over blocks (each loops over the views). */
+#ifndef MGS_VDB_TSDF_H
+#define MGS_VDB_TSDF_H
+#include <stddef.h>
+#include "core/mgs_camera.h"
+#include "core/mgs_error.h"
+#include "vdb/mgs_vdb.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mgs_vdb_tsdf_params {
+  double voxel_size;   /* world units (> 0) */
+  double truncation;   /* world units, >= voxel_size */
+  double origin[3];    /* the grid's translation (a point near the scene: precision) */
+} mgs_vdb_tsdf_params;
+
+typedef struct mgs_vdb_tsdf mgs_vdb_tsdf;
+
+mgs_status mgs_vdb_tsdf_create(const mgs_vdb_tsdf_params *p, mgs_vdb_tsdf **out, mgs_error *err);
+void mgs_vdb_tsdf_destroy(mgs_vdb_tsdf *t);
+
+/* What an integration did (any pointer argument taking it may be NULL). */
+typedef struct mgs_vdb_tsdf_info {
+  size_t views_used;      /* views with at least one valid depth pixel */
+  size_t pixels_used;     /* valid depth pixels */
+  size_t blocks;          /* allocated 8^3 blocks after the call */
+  size_t voxels_observed; /* voxels with weight > 0 after the call */
+} mgs_vdb_tsdf_info;
+
+/* Fuses n views (depth[k]: cams[k].height * width floats). May be called repeatedly
+ * (batches of views). Views without any valid pixel are skipped (counted in info). */
+mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mgs_camera *cams, const float *const *depth,
+                                  mgs_vdb_tsdf_info *info, mgs_error *err);
+
+/* Copies of the fused grids: "tsdf" (class UNKNOWN: truncated, projective, not a distance
+ * field; observed voxels active, others +t) and "tsdf_weight" (views per voxel). */
+mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vdb_grid **weight, mgs_error *err);
+
+/* The level set "sdf" of the fused zero crossing, valid as the α-field's (mgs_vdb.h,
+ * CLOSEST: every neighbour pair within one voxel). Voxels seen by at least min_weight
+ * views keep their fused value D; the unobserved inside behind the truncation is filled
+ * from the observed inside through unobserved voxels only, within the observed box (a
+ * closed surface's whole inside; w + 9 voxels with a warning when the fill reaches the
+ * box: no global flood fill, which an open shell leaks to all of space); the field
+ * 1/2 - D/(2t) (1 on the filled inside, 0 elsewhere) goes through the CLOSEST construction
+ * at tau = 1/2, so the band holds distances to the fused zero crossing (and to the edge
+ * of an open shell's limited fill, which then is a surface too: never a sign flip
+ * without a distance). Empty fused volume or no
+ * surface: MGS_ERR_FORMAT. */
+mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
+                               mgs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,300 @@
+// TSDF fusion into sparse OpenVDB trees (value + weight, same topology) and the level set
+// of its zero crossing (mgs_vdb_tsdf.h). Blocks are allocated from the views' rays
+// (parallel over views, per-thread key lists), then every block is fused against all the
+// views of the batch (parallel over blocks: each block is written by one thread only).
+#include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/ValueTransformer.h>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+#include "core/mgs_log.h"
+#include "vdb/mgs_vdb_tsdf.h"
+#include "vdb/vdb_internal.hpp"
+
+using namespace openvdb;
+
+struct mgs_vdb_tsdf {
+  mgs_vdb_tsdf_params p;
+  math::Transform::Ptr xf;
+  FloatTree::Ptr value, weight;
+};
+
+namespace {
+
+struct View {
+  const mgs_camera *cam;
+  const float *depth;
+};
+
+// Ray length per unit of camera z through the centre of pixel (px, py).
+inline double ray_scale(const mgs_camera &c, int px, int py) {
+  const double a = (px + 0.5 - c.cx) / c.fx, b = (py + 0.5 - c.cy) / c.fy;
+  return std::sqrt(1 + a * a + b * b);
+}
+
+inline bool valid_depth(float d) { return d > 0 && std::isfinite(d); }
+
+// Keys (origin / 8) of the blocks the segment of each valid pixel's ray within the
+// truncation of its depth passes through (sampled every half voxel).
+void collect_blocks(const mgs_vdb_tsdf &t, const View &v, std::vector<Coord> &keys, size_t &pixels) {
+  const mgs_camera &c = *v.cam;
+  const double h = t.p.voxel_size, tr = t.p.truncation;
+  const double *R = c.c2w;  // row-major: world = R x + translation
+  for (int py = 0; py < c.height; py++)
+    for (int px = 0; px < c.width; px++) {
+      const float d = v.depth[(size_t)py * c.width + px];
+      if (!valid_depth(d)) continue;
+      pixels++;
+      const double m = ray_scale(c, px, py), dz = tr / m;  // |d - z| m <= t
+      const double a = (px + 0.5 - c.cx) / c.fx, b = (py + 0.5 - c.cy) / c.fy;
+      const double dir[3] = {R[0] * a + R[1] * b + R[2], R[4] * a + R[5] * b + R[6], R[8] * a + R[9] * b + R[10]};
+      const double z0 = std::max((double)d - dz, 1e-6), z1 = (double)d + dz;
+      const int steps = (int)std::ceil((z1 - z0) * m / (0.5 * h)) + 1;
+      Coord last(INT32_MAX, 0, 0);
+      for (int s = 0; s <= steps; s++) {
+        const double z = z0 + (z1 - z0) * s / steps;
+        Coord k;
+        for (int i = 0; i < 3; i++) {
+          const double w = R[4 * i + 3] + z * dir[i];
+          k[i] = (Int32)std::floor((w - t.p.origin[i]) / h + 0.5) >> 3;
+        }
+        if (k != last) keys.push_back(k), last = k;
+      }
+    }
+}
+
+// Does the block with index origin o possibly project into the view's image?
+bool block_seen(const mgs_vdb_tsdf &t, const mgs_camera &c, const Coord &o) {
+  const double h = t.p.voxel_size, rad = std::sqrt(3.0) * 4 * h;
+  double w[3], pc[3];
+  for (int i = 0; i < 3; i++) w[i] = t.p.origin[i] + (o[i] + 3.5) * h;
+  mgs_camera_world_to_cam(&c, w, pc);
+  if (pc[2] + rad <= 0) return false;
+  if (pc[2] - rad <= 0) return true;
+  const double zr = pc[2] - rad;
+  const double u = c.fx * pc[0] / pc[2] + c.cx, v = c.fy * pc[1] / pc[2] + c.cy;
+  const double ru = c.fx * rad / zr * 1.5 + 1, rv = c.fy * rad / zr * 1.5 + 1;
+  return u + ru >= 0 && u - ru <= c.width && v + rv >= 0 && v - rv <= c.height;
+}
+
+void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, FloatTree::LeafNodeType &dl,
+                FloatTree::LeafNodeType &wl) {
+  const double h = t.p.voxel_size;
+  const float tr = (float)t.p.truncation;
+  const Coord o = dl.origin();
+  for (const View &v : views) {
+    const mgs_camera &c = *v.cam;
+    if (!block_seen(t, c, o)) continue;
+    const double *M = c.w2c;
+    for (auto it = dl.beginValueAll(); it; ++it) {
+      const Coord ijk = it.getCoord();
+      double w[3];
+      for (int i = 0; i < 3; i++) w[i] = t.p.origin[i] + ijk[i] * h;
+      const double z = M[8] * w[0] + M[9] * w[1] + M[10] * w[2] + M[11];
+      if (!(z > 0)) continue;
+      const double x = M[0] * w[0] + M[1] * w[1] + M[2] * w[2] + M[3];
+      const double y = M[4] * w[0] + M[5] * w[1] + M[6] * w[2] + M[7];
+      const double u = c.fx * x / z + c.cx, vv = c.fy * y / z + c.cy;
+      if (!(u >= 0 && u < c.width && vv >= 0 && vv < c.height)) continue;
+      const int px = (int)u, py = (int)vv;
+      const float d = v.depth[(size_t)py * c.width + px];
+      // d < 0: a background pixel, free space along its whole ray (carving)
+      const double sdf = d < 0 ? (double)tr : valid_depth(d) ? ((double)d - z) * ray_scale(c, px, py) : NAN;
+      if (!(sdf > -tr)) continue;
+      const float val = (float)std::min(sdf, (double)tr);
+      const Index off = it.pos();
+      const float W = wl.getValue(off), D = dl.getValue(off);
+      dl.setValueOn(off, (D * W + val) / (W + 1));
+      wl.setValueOn(off, W + 1);
+    }
+  }
+}
+
+}  // namespace
+
+extern "C" mgs_status mgs_vdb_tsdf_create(const mgs_vdb_tsdf_params *p, mgs_vdb_tsdf **out, mgs_error *err) {
+  *out = nullptr;
+  if (!p || !(p->voxel_size > 0) || !std::isfinite(p->voxel_size) || !(p->truncation >= p->voxel_size) ||
+      !std::isfinite(p->truncation))
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: voxel size %g and truncation %g: need 0 < voxel <= truncation",
+                         p ? p->voxel_size : 0.0, p ? p->truncation : 0.0);
+  for (int i = 0; i < 3; i++)
+    if (!std::isfinite(p->origin[i])) return mgs_error_set(err, MGS_ERR_ARG, "tsdf: origin not finite");
+  mgs_vdb_detail::init();
+  try {
+    auto *t = new mgs_vdb_tsdf;
+    t->p = *p;
+    t->xf = mgs_vdb_detail::make_transform(p->voxel_size, p->origin);
+    t->value = std::make_shared<FloatTree>((float)p->truncation);
+    t->weight = std::make_shared<FloatTree>(0.0f);
+    *out = t;
+  } catch (const std::exception &e) {
+    return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
+  }
+  return MGS_OK;
+}
+
+extern "C" void mgs_vdb_tsdf_destroy(mgs_vdb_tsdf *t) { delete t; }
+
+extern "C" mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mgs_camera *cams, const float *const *depth,
+                                             mgs_vdb_tsdf_info *info, mgs_error *err) {
+  if (!t || (n && (!cams || !depth))) return mgs_error_set(err, MGS_ERR_ARG, "tsdf: null argument");
+  std::vector<View> views;
+  for (size_t k = 0; k < n; k++) {
+    if (!depth[k] || cams[k].width <= 0 || cams[k].height <= 0 || !(cams[k].fx > 0) || !(cams[k].fy > 0))
+      return mgs_error_set(err, MGS_ERR_ARG, "tsdf: view %zu: no depth map or invalid camera", k);
+    views.push_back(View{&cams[k], depth[k]});
+  }
+  try {
+    const int nt = std::max(1, mgs_parallel_max_threads());
+    std::vector<std::vector<Coord>> keys(nt);
+    std::vector<size_t> pix(views.size(), 0);
+    mgs_vdb_detail::parallel_for(0, views.size(), 1, [&](size_t b, size_t e) {
+      auto &k = keys[mgs_parallel_thread_index() % nt];
+      for (size_t i = b; i < e; i++) collect_blocks(*t, views[i], k, pix[i]);
+    });
+    std::vector<View> used;
+    size_t pixels = 0;
+    for (size_t i = 0; i < views.size(); i++)
+      if (pix[i]) used.push_back(views[i]), pixels += pix[i];
+    for (auto &k : keys)
+      for (const Coord &c : k) {
+        const Coord o(c[0] * 8, c[1] * 8, c[2] * 8);
+        t->value->touchLeaf(o);
+        t->weight->touchLeaf(o);
+      }
+    keys.clear();
+    std::vector<FloatTree::LeafNodeType *> dl, wl;
+    for (auto it = t->value->beginLeaf(); it; ++it) {
+      dl.push_back(&*it);
+      wl.push_back(t->weight->probeLeaf(it->origin()));
+    }
+    if (!used.empty())
+      mgs_vdb_detail::parallel_for(0, dl.size(), 4, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; i++) fuse_block(*t, used, *dl[i], *wl[i]);
+      });
+    if (info) {
+      info->views_used = used.size();
+      info->pixels_used = pixels;
+      info->blocks = dl.size();
+      info->voxels_observed = (size_t)t->weight->activeVoxelCount();
+    }
+  } catch (const std::exception &e) {
+    return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
+  }
+  return MGS_OK;
+}
+
+extern "C" mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vdb_grid **weight,
+                                         mgs_error *err) {
+  if (tsdf) *tsdf = nullptr;
+  if (weight) *weight = nullptr;
+  try {
+    for (int k = 0; k < 2; k++) {
+      mgs_vdb_grid **o = k ? weight : tsdf;
+      if (!o) continue;
+      auto g = FloatGrid::create(std::make_shared<FloatTree>(k ? *t->weight : *t->value));
+      g->setTransform(t->xf->copy());
+      g->setName(k ? "tsdf_weight" : "tsdf");
+      g->setGridClass(GRID_UNKNOWN);
+      *o = mgs_vdb_detail::wrap(g);
+      if (!*o) throw std::bad_alloc();
+    }
+  } catch (const std::exception &e) {
+    if (tsdf) mgs_vdb_grid_destroy(*tsdf), *tsdf = nullptr;
+    return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf grids: %s", e.what());
+  }
+  return MGS_OK;
+}
+
+extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
+                                          mgs_error *err) {
+  *out = nullptr;
+  if (half_width < 1 || half_width > 1000)
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: band half-width %d outside [1, 1000] voxels", half_width);
+  const float tr = (float)t->p.truncation;
+  try {
+    // observed (weight >= min_weight) voxels, split by sign
+    MaskTree obs(false), pos(false), neg(false);
+    {
+      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<MaskTree> oa(obs), pa(pos), na(neg);
+      for (auto it = t->weight->cbeginValueOn(); it; ++it) {
+        if (!(*it >= min_weight)) continue;
+        const Coord c = it.getCoord();
+        oa.setValueOn(c);
+        (va.getValue(c) < 0 ? na : pa).setValueOn(c);
+      }
+    }
+    if (obs.activeVoxelCount() == 0)
+      return mgs_error_set(err, MGS_ERR_FORMAT, "tsdf: no voxel was observed (by %g views or more)", (double)min_weight);
+    if (neg.activeVoxelCount() == 0)
+      return mgs_error_set(err, MGS_ERR_FORMAT,
+                           "tsdf: no observed voxel lies behind a depth: the fused volume has no surface");
+    // The inside behind the truncation is unobserved: fill it from the observed inside
+    // through unobserved voxels only (never through observed outside), frontier by
+    // frontier, inside the box of the observed voxels. A closed fused surface gets its
+    // whole inside; an open one (unseen sides, thin parts) lets the fill reach the box's
+    // margin, and then the inside is grown only far enough to cover the band's leaves
+    // (w + 9 voxels) with a warning: no global flood fill, which leaks to all of space.
+    CoordBBox box;
+    obs.evalActiveVoxelBoundingBox(box);
+    box.expand(1);
+    auto inside = std::make_unique<MaskTree>(neg);
+    auto front = std::make_unique<MaskTree>(neg);
+    bool open = false;
+    for (int step = 0; front->activeVoxelCount() > 0; step++) {
+      auto next = std::make_unique<MaskTree>(*front);
+      MaskTree &nx = *next;
+      tools::dilateActiveValues(nx, 1, tools::NN_FACE, tools::IGNORE_TILES);
+      nx.topologyDifference(pos);
+      nx.topologyDifference(*inside);
+      if (!open) {
+        CoordBBox nb;
+        if (nx.evalActiveVoxelBoundingBox(nb) && (nb.min().x() <= box.min().x() || nb.min().y() <= box.min().y() || nb.min().z() <= box.min().z() ||
+                              nb.max().x() >= box.max().x() || nb.max().y() >= box.max().y() || nb.max().z() >= box.max().z()))
+          open = true;
+      }
+      if (open && step >= half_width + 9) break;
+      inside->topologyUnion(nx);
+      front = std::move(next);
+    }
+    if (open) {
+      // restart: the grown part is not trusted beyond the band's reach
+      inside = std::make_unique<MaskTree>(neg);
+      for (int k = 0; k < half_width + 9; k++) {
+        tools::dilateActiveValues(*inside, 1, tools::NN_FACE, tools::IGNORE_TILES);
+        inside->topologyDifference(pos);
+      }
+      mgs_warn("tsdf: the fused surface is not closed (its inside reaches unobserved space): the inside is filled "
+               "only %d voxels deep; persistence may see a cavity", half_width + 9);
+    }
+    // 1/2 - D/(2t) on observed voxels (> 1/2 inside), 1 on the grown inside, 0 elsewhere.
+    auto field = std::make_shared<FloatTree>(0.0f);
+    {
+      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<FloatTree> fa(*field);
+      tree::ValueAccessor<const MaskTree> ob(obs);
+      const float inv = 1.0f / (2 * tr);
+      for (auto it = obs.cbeginValueOn(); it; ++it) fa.setValue(it.getCoord(), 0.5f - va.getValue(it.getCoord()) * inv);
+      for (auto it = inside->cbeginValueOn(); it; ++it)
+        if (!ob.isValueOn(it.getCoord())) fa.setValue(it.getCoord(), 1.0f);
+    }
+    auto g = FloatGrid::create(field);
+    g->setTransform(t->xf->copy());
+    g->setGridClass(GRID_FOG_VOLUME);
+    mgs_vdb_grid a;
+    a.grid = g;
+    // Every crossing of this field is seeded (a blob's or an open fill's too: they become
+    // surfaces, not sign flips without distances), so the band is valid everywhere.
+    mgs_vdb_sdf_params sp;
+    mgs_vdb_sdf_params_default(&sp);
+    sp.tau = 0.5;
+    sp.half_width = half_width;
+    sp.method = MGS_VDB_SDF_CLOSEST;
+    return mgs_vdb_sdf_from_alpha(&a, &sp, out, err);
+  } catch (const std::exception &e) {
+    return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
+  }
+}

@@ -116,12 +116,13 @@ def main():
     subs_seen = set()
     context = None  # ("sub", name) or ("script", path)
     flags_checked = 0
+    unplaced = []
     for no, code in code_pieces(text):
         if code is None:
             context = None
             continue
         # tokens: a command (morsegs SUB, scripts/X) or a flag, in order within the piece
-        for m in re.finditer(r"(?<![\w/.-])(?:import\s+)?morsegs\s+([a-z][a-z-]*(?:\s+(?!-)[a-z][a-z0-9]*)?)"
+        for m in re.finditer(r"(?<![\w/.-])(?:import\s+)?morsegs\s+([A-Za-z][A-Za-z-]*(?:\s+(?!-)[a-z][a-z0-9]*)?)"
                              r"|(?<![\w/.-])(scripts/[\w.-]+)"
                              r"|(?<![\w-])(--[a-z][a-z0-9-]*)"
                              r"|(?<![\w/.-])(mpirun)(?![\w-])", code):
@@ -129,6 +130,9 @@ def main():
                 if m.group(0).startswith("import"):
                     continue
                 sub = m.group(1)
+                if sub[0].isupper():  # `morsegs COMMAND ...`: a placeholder, any subcommand
+                    context = None
+                    continue
                 # `morsegs bench NAME` has its own --help; elsewhere the next word is an operand
                 if not sub.startswith("bench "):
                     sub = sub.split()[0]
@@ -147,9 +151,10 @@ def main():
             else:
                 flag = m.group(3)
                 flags_checked += 1
+                if flag == "--help":
+                    continue  # every subcommand named was run with --help above
                 if context is None:
-                    if not any(has_flag(out, flag) for rc, out in helps.values() if rc == 0):
-                        fail("line %d: %s (no command before it) is in no subcommand's --help" % (no, flag))
+                    unplaced.append((no, flag))  # checked at the end against every --help
                 elif context[0] == "sub":
                     rc, out = help_text(cli, context[1], helps)
                     if rc == 0 and not has_flag(out, flag):
@@ -161,6 +166,9 @@ def main():
                         fail("line %d: %s does not appear in %s" % (no, flag, context[1]))
     if not subs_seen:
         fail("README.md names no `morsegs SUBCOMMAND`")
+    for no, flag in unplaced:
+        if not any(has_flag(out, flag) for rc, out in helps.values() if rc == 0):
+            fail("line %d: %s (no command before it) is in no subcommand's --help" % (no, flag))
 
     # 5. paths under the repository's top-level folders
     tops = sorted(d for d in os.listdir(src)

@@ -2,7 +2,7 @@
  * reference's metrics.py), Gaussian count and training time; RUN/results.json (in the
  * reference's "ours_N" layout plus our fields), a readable table, and side-by-side PNGs
  * render | ground truth | error (5x absolute error) in RUN/eval/. Geometry metrics against
- * a ground-truth mesh come from the mgs_eval_geometry hook (apps/mgs_eval_geometry.h). */
+ * a ground-truth mesh come from the mgs_eval_geometry hook (measure/mgs_eval_geometry.h). */
 #include <getopt.h>
 #include <limits.h>
 #include <stdio.h>
@@ -10,8 +10,8 @@
 #include <string.h>
 #include <cjson/cJSON.h>
 #include "apps/mgs_cli.h"
-#include "apps/mgs_depth_fusion.h"
-#include "apps/mgs_eval_geometry.h"
+#include "measure/mgs_depth_fusion.h"
+#include "measure/mgs_eval_geometry.h"
 #include "core/mgs_core.h"
 #include "render/mgs_loss.h"
 #include "render/mgs_raster.h"

@@ -4,7 +4,7 @@
  * plus file metadata (tool, version, tau, voxel_size, source) and, with --mesh, the zero
  * level set as a PLY/OBJ mesh. Never overwrites without --force.
  * morsegs vdb RUN -o OUT.vdb (a run folder), or --from-depth: the SDF from the model's
- * rendered depth fused at the run's cameras (apps/mgs_depth_fusion.h) is `sdf` (the first
+ * rendered depth fused at the run's cameras (measure/mgs_depth_fusion.h) is `sdf` (the first
  * level set: what `persistence` and --mesh take), with the fusion's `tsdf` and
  * `tsdf_weight`, and the α-field's grids beside it as `density` and `sdf_alpha`
  * (docs/notes-depth-fusion.md: why this is the default for run folders). */
@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "apps/mgs_cli.h"
-#include "apps/mgs_depth_fusion.h"
+#include "measure/mgs_depth_fusion.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"

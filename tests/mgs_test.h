@@ -54,6 +54,25 @@ static inline int mgs_test_sh(const char *fmt, ...) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
 }
 
+/* Does the file at `path` contain `needle`? (0 when it cannot be read) */
+static inline int mgs_test_file_has(const char *path, const char *needle) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return 0;
+  size_t cap = 1 << 16, len = 0;
+  char *b = malloc(cap + 1);
+  size_t got;
+  while (b && (got = fread(b + len, 1, cap - len, f)) > 0) {
+    len += got;
+    if (len == cap) { char *nb = realloc(b, 2 * cap + 1); if (!nb) break; b = nb; cap *= 2; }
+  }
+  fclose(f);
+  if (!b) return 0;
+  b[len] = 0;
+  int found = strstr(b, needle) != NULL;
+  free(b);
+  return found;
+}
+
 /* A fresh scratch directory under the test's working directory (removed first). */
 static inline const char *mgs_test_tmpdir(const char *name) {
   static char buf[256];

@@ -9,15 +9,6 @@
 #include "core/mgs_core.h"
 #include "mgs_test.h"
 
-static int file_has(const char *path, const char *needle) {
-  char *data = NULL;
-  size_t n = 0;
-  if (mgs_read_file(path, &data, &n, NULL) != MGS_OK) return 0;
-  int found = strstr(data, needle) != NULL;
-  free(data);
-  return found;
-}
-
 int main(void) {
   const char *cli = getenv("MGS_CLI");
   if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
@@ -28,15 +19,15 @@ int main(void) {
   CHECK(mgs_test_sh("%s train %s/scene -o %s/run --iters 40 --init levelset --normal-loss 0.05 --quiet --save-at 1000 "
            "--checkpoint-every 20 2> %s/log.txt", cli, tmp, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/log.txt", tmp);
-  CHECK(file_has(path, "level-set init"));
+  CHECK(mgs_test_file_has(path, "level-set init"));
   snprintf(path, sizeof path, "%s/run/cfg_args", tmp);
-  CHECK(file_has(path, "init='levelset'"));
-  CHECK(file_has(path, "normal_loss=0.05"));
+  CHECK(mgs_test_file_has(path, "init='levelset'"));
+  CHECK(mgs_test_file_has(path, "normal_loss=0.05"));
   snprintf(path, sizeof path, "%s/run/point_cloud/iteration_40/point_cloud.ply", tmp);
   CHECK(mgs_path_exists(path));
   /* the term acted: its weighted value at the last iteration is in train_stats.json */
   snprintf(path, sizeof path, "%s/run/train_stats.json", tmp);
-  CHECK(file_has(path, "\"normal\":") && !file_has(path, "\"normal\":\t0,") && !file_has(path, "\"normal\":\t0\n"));
+  CHECK(mgs_test_file_has(path, "\"normal\":") && !mgs_test_file_has(path, "\"normal\":\t0,") && !mgs_test_file_has(path, "\"normal\":\t0\n"));
   /* its state (the SDF it samples, built at iteration 30) comes back with a resume: a run
      interrupted at 50 and resumed ends byte-identical to the uninterrupted one (a term that
      rebuilt its SDF from the model of iteration 50 would not) */
@@ -48,18 +39,18 @@ int main(void) {
   /* --resume keeps the recorded weight (and loads the term's state from the checkpoint) */
   CHECK(mgs_test_sh("%s train %s/scene -o %s/run --iters 60 --quiet --resume 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run/cfg_args", tmp);
-  CHECK(file_has(path, "normal_loss=0.05"));
+  CHECK(mgs_test_file_has(path, "normal_loss=0.05"));
   /* the space-separated form and the bare flag */
   CHECK(mgs_test_sh("%s train %s/scene -o %s/run2 --iters 4 --normal-loss 0.03 --quiet 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run2/cfg_args", tmp);
-  CHECK(file_has(path, "normal_loss=0.03"));
+  CHECK(mgs_test_file_has(path, "normal_loss=0.03"));
   CHECK(mgs_test_sh("%s train %s/scene -o %s/run3 --iters 4 --normal-loss --quiet 2>/dev/null", cli, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/run3/cfg_args", tmp);
-  CHECK(file_has(path, "normal_loss=0.02"));
+  CHECK(mgs_test_file_has(path, "normal_loss=0.02"));
   /* bad values: usage errors naming the flag, nothing written */
   CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --normal-loss=-1 2> %s/err.txt", cli, tmp, tmp, tmp) == 2);
   snprintf(path, sizeof path, "%s/err.txt", tmp);
-  CHECK(file_has(path, "--normal-loss"));
+  CHECK(mgs_test_file_has(path, "--normal-loss"));
   CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --normal-loss=1e9 2>/dev/null", cli, tmp, tmp) == 2);
   CHECK(mgs_test_sh("%s train %s/scene -o %s/bad --init level 2>/dev/null", cli, tmp, tmp) == 2);
   snprintf(path, sizeof path, "%s/bad", tmp);
@@ -69,6 +60,6 @@ int main(void) {
   CHECK(mgs_test_sh("rm -f %s/scene/points3d.ply", tmp) == 0);
   CHECK(mgs_test_sh("%s train %s/scene -o %s/nopts --iters 4 --init levelset --quiet 2> %s/err2.txt", cli, tmp, tmp, tmp) == 0);
   snprintf(path, sizeof path, "%s/err2.txt", tmp);
-  CHECK(file_has(path, "visual hull") && file_has(path, "level-set init"));
+  CHECK(mgs_test_file_has(path, "visual hull") && mgs_test_file_has(path, "level-set init"));
   return mgs_test_finish();
 }

@@ -6,15 +6,6 @@
 #include "mgs_test.h"
 #include "core/mgs_core.h"
 
-static int file_has(const char *path, const char *needle) {
-  char *data = NULL;
-  size_t n = 0;
-  if (mgs_read_file(path, &data, &n, NULL) != MGS_OK) return 0;
-  int found = strstr(data, needle) != NULL;
-  free(data);
-  return found;
-}
-
 int main(void) {
   const char *cli = getenv("MGS_CLI"), *src = getenv("MGS_SOURCE_DIR");
   if (!cli || !src) { fprintf(stderr, "MGS_CLI / MGS_SOURCE_DIR not set\n"); return 1; }
@@ -40,7 +31,7 @@ int main(void) {
       snprintf(path, sizeof path, "%s/cfg_args", run);
       char want[64];
       snprintf(want, sizeof want, "white_background=%s", bg[f]);
-      CHECK_MSG(file_has(path, want), "%s on %s: not %s", runs[r], formats[f], want);
+      CHECK_MSG(mgs_test_file_has(path, want), "%s on %s: not %s", runs[r], formats[f], want);
     }
   return mgs_test_finish();
 }

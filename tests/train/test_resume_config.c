@@ -7,15 +7,6 @@
 #include "mgs_test.h"
 #include "core/mgs_core.h"
 
-static int file_has(const char *path, const char *needle) {
-  char *data = NULL;
-  size_t n = 0;
-  if (mgs_read_file(path, &data, &n, NULL) != MGS_OK) return 0;
-  int found = strstr(data, needle) != NULL;
-  free(data);
-  return found;
-}
-
 int main(void) {
   const char *cli = getenv("MGS_CLI");
   if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
@@ -40,11 +31,11 @@ int main(void) {
     CHECK(mgs_test_sh("MGS_TRAIN_INTERRUPT_AT=70 %s train %s/scene -o %s %s %s 2>/dev/null", cli, tmp, b, common,
                       cases[k].flags) == 130);
     snprintf(path, sizeof path, "%s/cfg_args", b);
-    CHECK_MSG(file_has(path, cases[k].record), "%s lacks %s", path, cases[k].record);
+    CHECK_MSG(mgs_test_file_has(path, cases[k].record), "%s lacks %s", path, cases[k].record);
     /* a contradicting flag is refused, naming the flag's value and the record's */
     snprintf(path, sizeof path, "%s/err.txt", b);
     CHECK(mgs_test_sh("%s train %s/scene -o %s --resume --quiet %s 2> %s", cli, tmp, b, cases[k].contra, path) == 2);
-    CHECK_MSG(file_has(path, cases[k].named) && file_has(path, "contradicts"), "%s: no '%s'", path, cases[k].named);
+    CHECK_MSG(mgs_test_file_has(path, cases[k].named) && mgs_test_file_has(path, "contradicts"), "%s: no '%s'", path, cases[k].named);
     /* a bare resume continues with every recorded setting */
     CHECK(mgs_test_sh("%s train %s/scene -o %s --resume --quiet", cli, tmp, b) == 0);
     CHECK_MSG(mgs_test_sh("cmp %s/point_cloud/iteration_120/point_cloud.ply %s/point_cloud/iteration_120/point_cloud.ply", a, b) == 0,

@@ -1,11 +1,11 @@
-/* Geometry metrics of `morsegs eval` (apps/eval_geometry.c): a torus surface of flat
+/* Geometry metrics of `morsegs eval` (measure/eval_geometry.c): a torus surface of flat
  * Gaussians against the torus mesh gives a small Chamfer distance and a high F-score; the
  * floater count is exactly the planted low-opacity Gaussians far from the surface (not the
  * low-opacity ones near it, nor the opaque far ones); bad paths fail cleanly. */
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdlib.h>
-#include "apps/mgs_eval_geometry.h"
+#include "measure/mgs_eval_geometry.h"
 #include "core/mgs_log.h"
 #include "core/mgs_math.h"
 #include "core/mgs_mesh.h"

@@ -1,5 +1,5 @@
 /* Hook of `morsegs eval` for geometry metrics against a ground-truth mesh (Chamfer
- * distance, F-score, floater count), implemented in apps/eval_geometry.c by the vdb
+ * distance, F-score, floater count), implemented in measure/eval_geometry.c by the vdb
  * work. cmd_eval calls it when --mesh GT is given or the dataset has gt_mesh.ply.
  *   ply_path          the trained 3DGS .ply
  *   gt_mesh_path      the ground-truth mesh (OBJ/PLY/OFF)
@@ -13,7 +13,7 @@
 int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
                       size_t table_len);
 /* The same for the surface of the model's depth fused at the run's cameras
- * (apps/eval_geometry_fused.c; `morsegs vdb RUN`'s default): Chamfer, F-score and the
+ * (measure/eval_geometry_fused.c; `morsegs vdb RUN`'s default): Chamfer, F-score and the
  * fusion's settings into the object; a note on stderr and non-zero when it fails. */
 typedef struct mgs_fusion_opts mgs_fusion_opts;
 int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, const char *gt_mesh_path,

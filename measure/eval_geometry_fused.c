@@ -1,15 +1,15 @@
 /* Geometry of the depth-fused surface for `morsegs eval` (beside the α-field's of
- * apps/eval_geometry.c): the run's model rendered at its cameras.json, fused
- * (apps/mgs_depth_fusion.h, the defaults `morsegs vdb RUN` uses), the zero level set of
+ * measure/eval_geometry.c): the run's model rendered at its cameras.json, fused
+ * (measure/mgs_depth_fusion.h, the defaults `morsegs vdb RUN` uses), the zero level set of
  * the rebuilt band against the GT mesh with the same samples and F-score threshold. */
-#include "apps/mgs_eval_geometry.h"
+#include "measure/mgs_eval_geometry.h"
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
-#include "apps/mgs_depth_fusion.h"
+#include "measure/mgs_depth_fusion.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
-#include "apps/mesh_pieces.h"
+#include "measure/mesh_pieces.h"
 #include "render/mgs_mesh_distance.h"
 
 #define EVAL_SAMPLES 100000

@@ -6,7 +6,7 @@
  *     threshold of 1 % of the GT mesh's bounding-box diagonal (relative to scene scale);
  *   - floaters (H2): Gaussians with opacity < 0.01 whose centre is farther than 3σ (σ = their
  *     largest std-dev) from the GT surface. */
-#include "apps/mgs_eval_geometry.h"
+#include "measure/mgs_eval_geometry.h"
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -14,7 +14,7 @@
 #include <string.h>
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
-#include "apps/mesh_pieces.h"
+#include "measure/mesh_pieces.h"
 #include "core/mgs_ply.h"
 #include "render/mgs_mesh_distance.h"
 #include "vdb/mgs_vdb.h"

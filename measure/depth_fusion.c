@@ -1,5 +1,5 @@
-/* Depth fusion of a splat model's renders (apps/mgs_depth_fusion.h). */
-#include "apps/mgs_depth_fusion.h"
+/* Depth fusion of a splat model's renders (measure/mgs_depth_fusion.h). */
+#include "measure/mgs_depth_fusion.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,6 +1,7 @@
 /* `morsegs demo`, shared between apps/cmd_demo.c (the stages, which run the subcommands
  * in-process) and apps/cmd_demo_report.c (DIR/REPORT.md and the stdout summary, read back
- * from the files the stages wrote, so no figure in the report is typed by the demo). */
+ * from the files the stages wrote, so no figure in the report is typed by the demo) and
+ * apps/cmd_demo_html.c (DIR/REPORT.html, the page to open). */
 #ifndef MGS_CMD_DEMO_H
 #define MGS_CMD_DEMO_H
 
@@ -34,7 +35,17 @@ typedef struct demo_ctx {
   int n_stages_done;
 } demo_ctx;
 
-/* Writes DIR/REPORT.md (atomically) and prints it; 0 on success, else the exit code. */
+/* Writes DIR/REPORT.md (atomically) and prints it, then DIR/REPORT.html; 0 on success,
+ * else the exit code. */
 int demo_report(const demo_ctx *ctx);
+
+/* The figures of one run the HTML page draws (NAN: not written). */
+typedef struct demo_html_figs {
+  double psnr, train_s;
+} demo_html_figs;
+/* Writes DIR/REPORT.html (apps/cmd_demo_html.c): the table of `md` (REPORT.md's text),
+ * PSNR against wall time, and per run the eval images, persistence plots and pictures of
+ * RUN/surface.ply (rendered into RUN/surface_views/). 0 on success, else the exit code. */
+int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs figs[DEMO_RUNS]);
 
 #endif

@@ -309,7 +309,13 @@ int demo_report(const demo_ctx *ctx) {
              figs[0].psnr, figs[1].psnr, figs[0].gaussians, figs[1].gaussians, figs[0].betti_p[0], figs[0].betti_p[1],
              figs[0].betti_p[2], figs[1].betti_p[0], figs[1].betti_p[1], figs[1].betti_p[2], figs[0].train_s, figs[1].train_s);
   }
+  int rc = st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
+  if (rc == 0) {
+    demo_html_figs hf[DEMO_RUNS];
+    for (int i = 0; i < DEMO_RUNS; i++) hf[i] = (demo_html_figs){i < n ? figs[i].psnr : NAN, i < n ? figs[i].train_s : NAN};
+    rc = demo_report_html(ctx, text, hf);
+  }
   free(path);
   free(text);
-  return st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
+  return rc;
 }

@@ -12,6 +12,7 @@ PKGS=(
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
   netgen-doc
+  chromium
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -1,0 +1,113 @@
+/* `morsegs demo`'s REPORT.html, looked at in a real browser: a small demo (few iterations)
+ * writes the page, its stdout names the file to open; every <img src> of the page is a
+ * relative path to a file in the output folder that decodes as an image (the eval views,
+ * persistence plots and Embree pictures of the surface of both runs); headless Chromium
+ * (Debian's `chromium`, scripts/setup.sh) loads the page from disk and its screenshot is
+ * not blank. Then the check is shown to bite: with one image moved away it fails. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include "mgs_test.h"
+#include "scene_test_util.h"
+#include "core/mgs_fs.h"
+#include "core/mgs_image.h"
+
+/* Checks every <img src="..."> of the page: relative, inside root, decodes. Returns the
+ * number of images that pass, -1 if any fails (reported); *first gets the first src. */
+static int check_images(const char *root, const char *html, char *first, size_t first_n) {
+  int ok = 0, bad = 0;
+  if (first_n) first[0] = 0;
+  for (const char *p = html; (p = strstr(p, "<img ")) != NULL;) {
+    const char *s = strstr(p, "src=\""), *end = strchr(p, '>');
+    p += 5;
+    if (!s || (end && s > end)) { fprintf(stderr, "an <img> without src\n"); bad++; continue; }
+    s += 5;
+    const char *q = strchr(s, '"');
+    if (!q || q - s >= 512) { bad++; continue; }
+    char src[512], path[2048];
+    memcpy(src, s, (size_t)(q - s));
+    src[q - s] = 0;
+    if (first_n && !first[0]) snprintf(first, first_n, "%s", src);
+    if (src[0] == '/' || strstr(src, "://") || strstr(src, "..")) { fprintf(stderr, "src not relative: %s\n", src); bad++; continue; }
+    snprintf(path, sizeof path, "%s/%s", root, src);
+    mgs_image *img = NULL;
+    mgs_error err;
+    mgs_error_clear(&err);
+    if (mgs_image_read(path, &img, &err) != MGS_OK || img->width < 8 || img->height < 8) {
+      fprintf(stderr, "image of the page missing or not decodable: %s (%s)\n", path, err.msg);
+      bad++;
+    } else ok++;
+    mgs_image_destroy(img);
+  }
+  return bad ? -1 : ok;
+}
+
+int main(void) {
+  const char *cli = getenv("MGS_CLI");
+  if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
+  char cwd[512], tmp[1024], root[1100], log_path[1200], page[1200], shot[1200];
+  if (!getcwd(cwd, sizeof cwd)) return 1;
+  snprintf(tmp, sizeof tmp, "%s/%s", cwd, mgs_test_tmpdir("scene_report_html"));
+  snprintf(root, sizeof root, "%s/out", tmp);
+  snprintf(log_path, sizeof log_path, "%s/demo_log.txt", tmp);
+  snprintf(page, sizeof page, "%s/REPORT.html", root);
+  snprintf(shot, sizeof shot, "%s/shot.png", tmp);
+  char cmd[8192];
+  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' --iters 60", cli, root);
+  CHECK(run_cmd(cmd, log_path) == 0);
+  char open_line[1300];
+  snprintf(open_line, sizeof open_line, "open %s\n", page);
+  CHECK_MSG(file_contains(log_path, open_line), "the demo's stdout does not say \"%s\"\n", open_line);
+
+  char *html = NULL;
+  mgs_error err;
+  mgs_error_clear(&err);
+  CHECK_OK(mgs_read_file(page, &html, NULL, &err), &err);
+  if (!html) return mgs_test_finish();
+  CHECK(strstr(html, "<table>") && strstr(html, "PSNR (test views)") && strstr(html, "<svg"));
+  CHECK_MSG(!strstr(html, "http://") && !strstr(html, "https://") && !strstr(html, "<script"), "the page reaches out\n");
+  char first[512];
+  int n_img = check_images(root, html, first, sizeof first);
+  /* per run: 3 eval views, diagram and barcode, 3 surface pictures; two runs */
+  CHECK_MSG(n_img == 16, "%d images on the page pass (16 expected)\n", n_img);
+  CHECK(strstr(html, "run/eval/") && strstr(html, "run-morse/persistence/barcode.png") &&
+        strstr(html, "run/surface_views/view_0.png"));
+
+  /* the browser: the page loads from disk and is not blank */
+  snprintf(cmd, sizeof cmd, "timeout 180 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
+           "--user-data-dir='%s/chromium' --screenshot='%s' --window-size=1200,2000 'file://%s'", tmp, shot, page);
+  CHECK_MSG(run_cmd(cmd, log_path) == 0 && mgs_path_exists(shot),
+            "headless chromium failed (install Debian's chromium: scripts/setup.sh); see %s\n", log_path);
+  mgs_image *img = NULL;
+  if (mgs_path_exists(shot)) CHECK_OK(mgs_image_read(shot, &img, &err), &err);
+  if (img) {
+    size_t n = (size_t)img->width * img->height, inked = 0;
+    double sum = 0, sum2 = 0;
+    for (size_t i = 0; i < n; i++) {
+      const float *px = img->data + i * img->channels;
+      double l = (px[0] + px[1] + px[2]) / 3.0;
+      sum += l, sum2 += l * l;
+      inked += l < 0.9; /* neither white nor the near-white table stripes */
+    }
+    double mean = sum / n, var = sum2 / n - mean * mean;
+    fprintf(stderr, "screenshot %dx%d: %.1f %% of pixels inked, luminance variance %.4f\n", img->width, img->height,
+            100.0 * inked / n, var);
+    CHECK(img->width == 1200 && img->height == 2000);
+    CHECK_MSG(inked > n / 20, "the screenshot is nearly blank (%zu of %zu pixels inked)\n", inked, n);
+    CHECK_MSG(var > 0.01, "the screenshot has no contrast (variance %g)\n", var);
+  }
+  mgs_image_destroy(img);
+
+  /* the check bites: one image of the page moved away -> it fails */
+  char from[1700], to[1800];
+  snprintf(from, sizeof from, "%s/%s", root, first);
+  snprintf(to, sizeof to, "%s.away", from);
+  CHECK(first[0] && rename(from, to) == 0);
+  fprintf(stderr, "expected failure follows:\n");
+  CHECK_MSG(check_images(root, html, first, 0) == -1, "the page check passed with %s missing\n", from);
+  CHECK(rename(to, from) == 0);
+  CHECK(check_images(root, html, first, 0) == n_img);
+  free(html);
+  return mgs_test_finish();
+}

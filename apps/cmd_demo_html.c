@@ -1,7 +1,7 @@
 /* DIR/REPORT.html of `morsegs demo`: the page to open. Self-contained (no network, no
  * script): images by relative links into DIR, the PSNR-vs-time chart as inline SVG.
  * Holds the figures table of REPORT.md (converted from its text, so the two never
- * disagree), render | GT | error of a few test views (RUN/eval/*.png of `morsegs eval`),
+ * disagree), render | GT | error of a few test views (the PNGs `morsegs eval` writes into RUN/eval/),
  * the persistence diagram and barcode (RUN/persistence/), and pictures of the extracted
  * surface (RUN/surface.ply) rendered by the scene's Embree renderer into RUN/surface_views/.
  * What a stage did not write is said in the page, never left as a broken image. */
@@ -149,8 +149,9 @@ static void put_chart(FILE *f, const demo_ctx *ctx, const demo_html_figs *figs) 
     if (!isfinite(figs[i].psnr) || !isfinite(figs[i].train_s)) continue;
     double x = L + (W - L - R) * figs[i].train_s / tmax, y = T + (H - T - B) * (pmax - figs[i].psnr) / (pmax - pmin);
     fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"7\" fill=\"%s\"/>\n", x, y, colors[i]);
-    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\">%s: %.2f dB, %.1f s</text>\n", x + 10, y - 8,
-            ctx->runs[i].label, figs[i].psnr, figs[i].train_s);
+    int right = x > (L + W - R) / 2; /* label on the side with room */
+    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" text-anchor=\"%s\">%s: %.2f dB, %.1f s</text>\n",
+            right ? x - 10 : x + 10, y - 8, right ? "end" : "start", ctx->runs[i].label, figs[i].psnr, figs[i].train_s);
   }
   fputs("</svg>\n<p>One point per run: the demo evaluates each model once, after training; there are no "
         "intermediate evaluations to draw a curve from.</p>\n", f);
@@ -184,7 +185,7 @@ static void put_run(FILE *f, const demo_run *r) {
   }
   if (!any) fputs("<p>No plots in persistence/ (the persistence stage did not run).</p>\n", f);
   fputs("<h3>Surface (<code>surface.ply</code>, the α-surface of <code>morsegs vdb --mesh</code>), rendered with Embree</h3>\n", f);
-  char why[512] = "";
+  char why[1100] = "";
   int nv = r->run_dir ? surface_views(r->run_dir, why, sizeof why) : 0;
   if (nv == 0) { fputs("<p>No pictures: ", f); put_text(f, why, strlen(why)); fputs("</p>\n", f); }
   for (int i = 0; i < nv; i++) {
@@ -194,7 +195,7 @@ static void put_run(FILE *f, const demo_run *r) {
   }
 }
 
-int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs *figs) {
+int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs figs[DEMO_RUNS]) {
   char *text = NULL;
   size_t len = 0;
   FILE *f = open_memstream(&text, &len);

@@ -3,7 +3,8 @@
  * relative path to a file in the output folder that decodes as an image (the eval views,
  * persistence plots and Embree pictures of the surface of both runs); headless Chromium
  * (Debian's `chromium`, scripts/setup.sh) loads the page from disk and its screenshot is
- * not blank. Then the check is shown to bite: with one image moved away it fails. */
+ * not blank and shows the pictures (a share of saturated pixels, which text and tables
+ * do not have). Then the check is shown to bite: with one image moved away it fails. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,40 @@ static int check_images(const char *root, const char *html, char *first, size_t 
   return bad ? -1 : ok;
 }
 
+typedef struct { int w, h; double inked, colour, var; } shot_figs;
+
+/* Headless Chromium's screenshot of `page` (1200x2000) into `shot`, and its figures:
+ * share of pixels inked (luminance < 0.9: neither white nor the near-white table
+ * stripes), share in colour (max - min channel > 0.25: the pictures; text and tables are
+ * grey), luminance variance. 0 on success. */
+static int screenshot(const char *tmp, const char *page, const char *shot, const char *log, shot_figs *sf) {
+  char cmd[4096];
+  memset(sf, 0, sizeof *sf);
+  remove(shot);
+  snprintf(cmd, sizeof cmd, "timeout 180 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
+           "--user-data-dir='%s/chromium' --screenshot='%s' --window-size=1200,2000 'file://%s'", tmp, shot, page);
+  if (run_cmd(cmd, log) != 0 || !mgs_path_exists(shot)) return 1;
+  mgs_image *img = NULL;
+  mgs_error err;
+  mgs_error_clear(&err);
+  if (mgs_image_read(shot, &img, &err) != MGS_OK) { fprintf(stderr, "%s\n", err.msg); return 1; }
+  size_t n = (size_t)img->width * img->height, inked = 0, colour = 0;
+  double sum = 0, sum2 = 0;
+  for (size_t i = 0; i < n; i++) {
+    const float *px = img->data + i * img->channels;
+    double l = (px[0] + px[1] + px[2]) / 3.0;
+    sum += l, sum2 += l * l;
+    inked += l < 0.9;
+    float hi = px[0] > px[1] ? px[0] : px[1], lo = px[0] < px[1] ? px[0] : px[1];
+    hi = hi > px[2] ? hi : px[2], lo = lo < px[2] ? lo : px[2];
+    colour += hi - lo > 0.25f;
+  }
+  double mean = sum / n;
+  *sf = (shot_figs){img->width, img->height, (double)inked / n, (double)colour / n, sum2 / n - mean * mean};
+  mgs_image_destroy(img);
+  return 0;
+}
+
 int main(void) {
   const char *cli = getenv("MGS_CLI");
   if (!cli) { fprintf(stderr, "MGS_CLI not set\n"); return 1; }
@@ -75,29 +110,26 @@ int main(void) {
         strstr(html, "run/surface_views/view_0.png"));
 
   /* the browser: the page loads from disk and is not blank */
-  snprintf(cmd, sizeof cmd, "timeout 180 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
-           "--user-data-dir='%s/chromium' --screenshot='%s' --window-size=1200,2000 'file://%s'", tmp, shot, page);
-  CHECK_MSG(run_cmd(cmd, log_path) == 0 && mgs_path_exists(shot),
-            "headless chromium failed (install Debian's chromium: scripts/setup.sh); see %s\n", log_path);
-  mgs_image *img = NULL;
-  if (mgs_path_exists(shot)) CHECK_OK(mgs_image_read(shot, &img, &err), &err);
-  if (img) {
-    size_t n = (size_t)img->width * img->height, inked = 0;
-    double sum = 0, sum2 = 0;
-    for (size_t i = 0; i < n; i++) {
-      const float *px = img->data + i * img->channels;
-      double l = (px[0] + px[1] + px[2]) / 3.0;
-      sum += l, sum2 += l * l;
-      inked += l < 0.9; /* neither white nor the near-white table stripes */
-    }
-    double mean = sum / n, var = sum2 / n - mean * mean;
-    fprintf(stderr, "screenshot %dx%d: %.1f %% of pixels inked, luminance variance %.4f\n", img->width, img->height,
-            100.0 * inked / n, var);
-    CHECK(img->width == 1200 && img->height == 2000);
-    CHECK_MSG(inked > n / 20, "the screenshot is nearly blank (%zu of %zu pixels inked)\n", inked, n);
-    CHECK_MSG(var > 0.01, "the screenshot has no contrast (variance %g)\n", var);
-  }
-  mgs_image_destroy(img);
+  shot_figs sf;
+  CHECK_MSG(screenshot(tmp, page, shot, log_path, &sf) == 0,
+            "headless chromium gave no screenshot (install Debian's chromium: scripts/setup.sh); see %s\n", log_path);
+  fprintf(stderr, "screenshot %dx%d: %.1f %% of pixels inked, %.2f %% in colour, luminance variance %.4f\n", sf.w, sf.h,
+          100.0 * sf.inked, 100.0 * sf.colour, sf.var);
+  CHECK(sf.w == 1200 && sf.h == 2000);
+  CHECK_MSG(sf.inked > 0.05, "the screenshot is nearly blank (%.2f %% of pixels inked)\n", 100.0 * sf.inked);
+  CHECK_MSG(sf.colour > 0.005, "the screenshot shows no pictures (%.3f %% of pixels in colour)\n", 100.0 * sf.colour);
+  CHECK_MSG(sf.var > 0.01, "the screenshot has no contrast (variance %g)\n", sf.var);
+  /* the colour share bites: the same page with its <img> turned into <br> (text, tables
+     and chart kept) falls under it */
+  char bare[1300];
+  snprintf(bare, sizeof bare, "%s/bare.html", root);
+  char *copy = strdup(html);
+  for (char *p = copy; p && (p = strstr(p, "<img ")) != NULL;) memcpy(p, "<br  ", 5);
+  CHECK(copy && mgs_write_file_atomic(bare, copy, strlen(copy), &err) == MGS_OK);
+  free(copy);
+  CHECK(screenshot(tmp, bare, shot, log_path, &sf) == 0);
+  fprintf(stderr, "without pictures: %.1f %% inked, %.3f %% in colour\n", 100.0 * sf.inked, 100.0 * sf.colour);
+  CHECK_MSG(sf.colour < 0.005, "the page without pictures passes the colour check (%.3f %%)\n", 100.0 * sf.colour);
 
   /* the check bites: one image of the page moved away -> it fails */
   char from[1700], to[1800];

@@ -3,7 +3,7 @@
  * Holds the figures table of REPORT.md (converted from its text, so the two never
  * disagree), render | GT | error of a few test views (the PNGs `morsegs eval` writes into RUN/eval/),
  * the persistence diagram and barcode (RUN/persistence/), and pictures of the extracted
- * surface (RUN/surface.ply) rendered by the scene's Embree renderer into RUN/surface_views/.
+ * surface (RUN/surface.ply) rendered by the scene's Embree renderer into DIR/surface_views/.
  * What a stage did not write is said in the page, never left as a broken image. */
 #include <dirent.h>
 #include <math.h>
@@ -31,6 +31,17 @@ static void put_text(FILE *f, const char *s, size_t n) {
     else fputc(c, f);
   }
   if (code) fputs("</code>", f);
+}
+
+/* Text for an attribute value: &, <, >, " escaped. */
+static void put_attr(FILE *f, const char *s) {
+  for (; *s; s++) {
+    if (*s == '&') fputs("&amp;", f);
+    else if (*s == '<') fputs("&lt;", f);
+    else if (*s == '>') fputs("&gt;", f);
+    else if (*s == '"') fputs("&quot;", f);
+    else fputc(*s, f);
+  }
 }
 
 /* The Markdown of REPORT.md as HTML: "# " headings, tables of "| a | b |" lines (the
@@ -90,10 +101,10 @@ static int list_pngs(const char *dir, char **names, int max) {
   return k;
 }
 
-/* Renders RUN/surface.ply into RUN/surface_views/view_K.png (white background); returns
- * the number written, 0 with a reason in `why`. */
-static int surface_views(const char *run_dir, char *why, size_t why_n) {
-  char *ply = mgs_path_join(run_dir, "surface.ply"), *dir = mgs_path_join(run_dir, "surface_views");
+/* Renders RUN/surface.ply into DIR/surface_views/run<k>_view_<i>.png (white background);
+ * returns the number written, 0 with a reason in `why`. */
+static int surface_views(const char *out_dir, int k, const char *run_dir, char *why, size_t why_n) {
+  char *ply = mgs_path_join(run_dir, "surface.ply"), *dir = mgs_path_join(out_dir, "surface_views");
   mgs_mesh *m = NULL;
   mgs_image *views[SURFACE_VIEWS] = {0};
   mgs_error err;
@@ -107,7 +118,7 @@ static int surface_views(const char *run_dir, char *why, size_t why_n) {
   static const float white[3] = {1, 1, 1};
   for (int i = 0; i < SURFACE_VIEWS && s == MGS_OK; i++) {
     char name[32];
-    snprintf(name, sizeof name, "view_%d.png", i);
+    snprintf(name, sizeof name, "run%d_view_%d.png", k, i);
     char *path = mgs_path_join(dir, name);
     mgs_image *rgb = mgs_image_composite(views[i], white);
     s = path && rgb ? mgs_image_write(path, rgb, &err) : mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory");
@@ -158,13 +169,18 @@ static void put_chart(FILE *f, const demo_ctx *ctx, const demo_html_figs *figs) 
 }
 
 static void put_img(FILE *f, const char *subdir, const char *rel, const char *alt, const char *cls) {
-  fprintf(f, "<img class=\"%s\" src=\"%s/", cls, subdir);
-  put_text(f, rel, strlen(rel));
+  fprintf(f, "<img class=\"%s\" src=\"", cls);
+  if (subdir) put_attr(f, subdir), fputc('/', f);
+  put_attr(f, rel);
   fprintf(f, "\" alt=\"%s\">\n", alt);
 }
 
-static void put_run(FILE *f, const demo_run *r) {
-  fprintf(f, "<h2>%s (<code>%s/</code>)</h2>\n<h3>Test views: render | ground truth | error (x5)</h3>\n", r->label, r->subdir);
+static void put_run(FILE *f, const char *out_dir, int k, const demo_run *r) {
+  fputs("<h2>", f);
+  put_attr(f, r->label);
+  fputs(" (<code>", f);
+  put_attr(f, r->subdir);
+  fputs("/</code>)</h2>\n<h3>Test views: render | ground truth | error (x5)</h3>\n", f);
   char *eval_dir = r->run_dir ? mgs_path_join(r->run_dir, "eval") : NULL, *names[EVAL_VIEWS];
   int n = list_pngs(eval_dir, names, EVAL_VIEWS);
   if (n == 0) fputs("<p>No images in eval/ (the eval stage did not run).</p>\n", f);
@@ -178,20 +194,20 @@ static void put_run(FILE *f, const demo_run *r) {
   fputs("<h3>Persistence of the SDF: diagram and barcode</h3>\n", f);
   int any = 0;
   static const char *plots[2] = {"persistence/diagram.png", "persistence/barcode.png"};
-  for (int k = 0; k < 2; k++) {
-    char *p = r->run_dir ? mgs_path_join(r->run_dir, plots[k]) : NULL;
-    if (p && mgs_path_exists(p)) put_img(f, r->subdir, plots[k], plots[k], "plot"), any = 1;
+  for (int j = 0; j < 2; j++) {
+    char *p = r->run_dir ? mgs_path_join(r->run_dir, plots[j]) : NULL;
+    if (p && mgs_path_exists(p)) put_img(f, r->subdir, plots[j], plots[j], "plot"), any = 1;
     free(p);
   }
   if (!any) fputs("<p>No plots in persistence/ (the persistence stage did not run).</p>\n", f);
   fputs("<h3>Surface (<code>surface.ply</code>, the α-surface of <code>morsegs vdb --mesh</code>), rendered with Embree</h3>\n", f);
   char why[1100] = "";
-  int nv = r->run_dir ? surface_views(r->run_dir, why, sizeof why) : 0;
+  int nv = r->run_dir ? surface_views(out_dir, k, r->run_dir, why, sizeof why) : 0;
   if (nv == 0) { fputs("<p>No pictures: ", f); put_text(f, why, strlen(why)); fputs("</p>\n", f); }
   for (int i = 0; i < nv; i++) {
     char rel[64];
-    snprintf(rel, sizeof rel, "surface_views/view_%d.png", i);
-    put_img(f, r->subdir, rel, "surface", "view");
+    snprintf(rel, sizeof rel, "surface_views/run%d_view_%d.png", k, i);
+    put_img(f, NULL, rel, "surface", "view");
   }
 }
 
@@ -200,7 +216,7 @@ int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs f
   size_t len = 0;
   FILE *f = open_memstream(&text, &len);
   if (!f) { fprintf(stderr, "morsegs demo: out of memory for the report\n"); return 1; }
-  fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>MorseGS demo report</title>\n"
+  fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>MorseGS report</title>\n"
         "<style>body{font-family:sans-serif;margin:24px;max-width:1200px;color:#222;background:#fff}"
         "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #bbb;padding:4px 8px;text-align:left;"
         "vertical-align:top;font-size:14px}th{background:#dde4f0}tr:nth-child(even) td{background:#f3f5f9}"
@@ -209,7 +225,7 @@ int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs f
         "code{background:#eef;padding:0 3px}</style></head><body>\n", f);
   put_markdown(f, md);
   put_chart(f, ctx, figs);
-  for (int i = 0; i < ctx->n_runs; i++) put_run(f, &ctx->runs[i]);
+  for (int i = 0; i < ctx->n_runs; i++) put_run(f, ctx->out_dir, i, &ctx->runs[i]);
   fputs("</body></html>\n", f);
   int failed = ferror(f);
   fclose(f);
@@ -221,5 +237,5 @@ int demo_report_html(const demo_ctx *ctx, const char *md, const demo_html_figs f
   if (st == MGS_OK) printf("  wrote %s\n", path);
   free(path);
   free(text);
-  return st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
+  return st == MGS_OK ? 0 : mgs_cli_fail(ctx->report_only ? "report" : "demo", &err);
 }

@@ -296,8 +296,8 @@ int demo_report(const demo_ctx *ctx) {
   for (int i = 0; i < ctx->n_stages_done; i++) fprintf(b, "%s %s %.1f s", i ? "," : "", ctx->stage_name[i], ctx->stage_seconds[i]);
   fprintf(b, ".\n\nFiles (%s): `point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), "
                 "`eval/` (render | GT | error), `scene.vdb` (grids `density`, `sdf`), `surface.ply`, `persistence/` "
-                "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s; `surface_views/` (Embree pictures of each "
-                "run's surface.ply, for REPORT.html).\n",
+                "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s. Beside this file: REPORT.html (the page "
+                "to open) and `surface_views/` (its Embree pictures of each run's surface.ply).\n",
             n > 1 ? "per run, in `run/` and `run-morse/`" : "in `run/`", ctx->iters,
             n > 1 ? "; `run-morse/morse_analysis.csv` (one row per Morse analysis)" : "");
   }

@@ -4,7 +4,8 @@
  * against the ground-truth mesh), the .vdb export (density + sdf + surface mesh),
  * persistence of the SDF (diagram, barcode, critical points); then the same four stages
  * for `--preset morse-full` at the same seed and iterations (DIR/run-morse), and a report
- * that puts the two side by side, DIR/REPORT.md (apps/cmd_demo_report.c).
+ * that puts the two side by side, DIR/REPORT.md (apps/cmd_demo_report.c) and the page to
+ * open, DIR/REPORT.html with the pictures (apps/cmd_demo_html.c).
  * The later stages run the subcommands in-process with the arguments a user would type,
  * so the demo exercises exactly what the CLI does. */
 #include <getopt.h>
@@ -153,7 +154,7 @@ static const demo_stage stages[] = {
     {"eval-morse", "the same evaluation of the morse-full model", stage_eval, DEMO_MORSE},
     {"vdb-morse", "the same .vdb export of the morse-full model", stage_vdb, DEMO_MORSE},
     {"persist-morse", "the same persistence of its SDF", stage_persistence, DEMO_MORSE},
-    {"report", "DIR/REPORT.md: baseline and morse-full side by side", stage_report, -1},
+    {"report", "DIR/REPORT.md and REPORT.html: baseline and morse-full side by side", stage_report, -1},
 };
 enum { N_STAGES = sizeof stages / sizeof stages[0] };
 
@@ -226,7 +227,7 @@ int mgs_cmd_demo(int argc, char **argv) {
       ctx.stage_seconds[ctx.n_stages_done++] = mgs_now() - ts;
     }
   }
-  if (rc == 0) printf("demo done in %.1f s; outputs in %s/\n", mgs_now() - t0, ctx.out_dir);
+  if (rc == 0) printf("demo done in %.1f s; outputs in %s/\nopen %s/REPORT.html\n", mgs_now() - t0, ctx.out_dir, ctx.out_dir);
   free(ctx.scene_dir);
   for (int r = 0; r < DEMO_RUNS; r++) {
     free(ctx.runs[r].run_dir);

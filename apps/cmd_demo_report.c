@@ -222,10 +222,16 @@ int demo_report(const demo_ctx *ctx) {
   FILE *b = open_memstream(&text, &text_len);
   if (!b) { fprintf(stderr, "morsegs demo: out of memory for the report\n"); return 1; }
 
+  if (ctx->report_only) {
+    fprintf(b, "# MorseGS report\n\nRuns (`morsegs report`):");
+    for (int i = 0; i < n; i++) fprintf(b, "%s `%s`", i ? "," : "", ctx->runs[i].run_dir);
+    fprintf(b, ". Each figure is read from the files the run's stages wrote; n/a: not written.\n\n");
+  } else
   fprintf(b, "# MorseGS demo report\n\n"
                 "Scene: built-in `genus2` (a closed double torus: Betti numbers of the solid 1, 2, 0), "
                 "40 train / 8 test views at 128x128, rendered with Embree. ");
-  if (n > 1)
+  if (ctx->report_only) {
+  } else if (n > 1)
     fprintf(b, "Two training runs on it, the same seed and iterations: the 3DGS baseline (`run/`) and "
                   "MorseGS `--preset morse-full` (`run-morse/`), each evaluated, exported and analysed the same way.\n\n");
   else
@@ -268,7 +274,7 @@ int demo_report(const demo_ctx *ctx) {
       f->csv_rows > 0 ? (void)fmt_betti(c, W, f->betti_eps_last) : (void)snprintf(c, W, "–"));
 #undef ROW
 
-  if (n > 1) {
+  if (n > 1 && !ctx->report_only) {
     const run_figs *m = &figs[DEMO_MORSE];
     fprintf(b, "\nThe morse-full run used `--morse-warmup %s --morse-every %s` (from `run-morse/cfg_args`): the "
                   "preset's defaults (W = 3000, K = 500) belong to a 30000-iteration schedule and would never fire in "
@@ -285,13 +291,16 @@ int demo_report(const demo_ctx *ctx) {
                   "variants and seeds, with H1–H4 verdicts) is `morsegs experiment`; it also measures floaters by "
                   "their visible opacity mass, where `morsegs eval` (above) counts them.\n", ctx->iters);
   }
+  if (!ctx->report_only) {
   fprintf(b, "\nStage wall times of this demo:");
   for (int i = 0; i < ctx->n_stages_done; i++) fprintf(b, "%s %s %.1f s", i ? "," : "", ctx->stage_name[i], ctx->stage_seconds[i]);
   fprintf(b, ".\n\nFiles (%s): `point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), "
                 "`eval/` (render | GT | error), `scene.vdb` (grids `density`, `sdf`), `surface.ply`, `persistence/` "
-                "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s.\n",
+                "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s. Beside this file: REPORT.html (the page "
+                "to open) and `surface_views/` (its Embree pictures of each run's surface.ply).\n",
             n > 1 ? "per run, in `run/` and `run-morse/`" : "in `run/`", ctx->iters,
             n > 1 ? "; `run-morse/morse_analysis.csv` (one row per Morse analysis)" : "");
+  }
   for (int i = 0; i < n; i++) mgs_settings_free(&figs[i].cfg);
 
   mgs_error err;
@@ -303,13 +312,19 @@ int demo_report(const demo_ctx *ctx) {
   if (st == MGS_OK) {
     printf("%s", text);
     printf("  wrote %s\n", path);
-    if (n > 1) /* the one-line comparison a user reads first */
+    if (n > 1 && !ctx->report_only) /* the one-line comparison a user reads first */
       printf("  baseline vs morse-full: PSNR %.2f vs %.2f dB, %.0f vs %.0f Gaussians, persistent Betti %d,%d,%d vs %d,%d,%d "
              "(shape 1,2,0), %.1f vs %.1f s training\n",
              figs[0].psnr, figs[1].psnr, figs[0].gaussians, figs[1].gaussians, figs[0].betti_p[0], figs[0].betti_p[1],
              figs[0].betti_p[2], figs[1].betti_p[0], figs[1].betti_p[1], figs[1].betti_p[2], figs[0].train_s, figs[1].train_s);
   }
+  int rc = st == MGS_OK ? 0 : mgs_cli_fail(ctx->report_only ? "report" : "demo", &err);
+  if (rc == 0) {
+    demo_html_figs hf[DEMO_RUNS];
+    for (int i = 0; i < DEMO_RUNS; i++) hf[i] = (demo_html_figs){i < n ? figs[i].psnr : NAN, i < n ? figs[i].train_s : NAN};
+    rc = demo_report_html(ctx, text, hf);
+  }
   free(path);
   free(text);
-  return st == MGS_OK ? 0 : mgs_cli_fail("demo", &err);
+  return rc;
 }

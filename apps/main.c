@@ -9,6 +9,7 @@ typedef struct { const char *name; int (*fn)(int, char **); const char *help; } 
 
 static const command commands[] = {
   {"demo", mgs_cmd_demo, "build the bundled scene, train it briefly, export and report"},
+  {"report", mgs_cmd_report, "REPORT.md and REPORT.html (the page to open) of one or two trained runs"},
   {"scene", mgs_cmd_scene, "render a NeRF-synthetic dataset of a mesh with Embree"},
   {"train", mgs_cmd_train, "train a 3DGS model on a dataset"},
   {"render", mgs_cmd_render, "render the views of a trained run"},

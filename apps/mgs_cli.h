@@ -8,6 +8,7 @@
 #include "train/mgs_config.h"
 
 int mgs_cmd_demo(int argc, char **argv);
+int mgs_cmd_report(int argc, char **argv);
 int mgs_cmd_scene(int argc, char **argv);
 int mgs_cmd_train(int argc, char **argv);
 int mgs_cmd_render(int argc, char **argv);

@@ -92,6 +92,12 @@ void mgs_scene_renderer_destroy(mgs_scene_renderer *r);
  * `view_index` only seeds the sub-pixel jitter. Returns the number of rays cast. */
 double mgs_scene_render_view(const mgs_scene_renderer *r, const mgs_camera *cam, const mgs_scene_options *o,
                              uint32_t view_index, mgs_image *rgba);
+/* n_views RGBA pictures (size x size, straight alpha) of a mesh in a scene's world frame,
+ * seen from the test rig's cameras around the origin (mgs_scene_make_cameras, split 1),
+ * with the dataset's shading; open meshes are allowed. views[] is filled (caller destroys
+ * each) or, on an error, left all NULL. Errors: bad counts/size (MGS_ERR_ARG), an empty or
+ * non-finite mesh (MGS_ERR_FORMAT), Embree or memory failures. */
+mgs_status mgs_scene_render_mesh_views(const mgs_mesh *mesh, int n_views, int size, mgs_image **views, mgs_error *err);
 /* First hit of a ray (t in (tnear, tfar)); returns 1 and the distance on a hit. */
 int mgs_scene_trace(const mgs_scene_renderer *r, const double org[3], const double dir[3], double tnear, double *t_hit);
 

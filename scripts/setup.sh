@@ -12,6 +12,7 @@ PKGS=(
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
   netgen-doc gmsh-doc python3-open3d
+  chromium
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -7,7 +7,7 @@
  * rendered depth fused at the run's cameras (measure/mgs_depth_fusion.h) is `sdf` (the first
  * level set: what `persistence` and --mesh take), with the fusion's `tsdf` and
  * `tsdf_weight`, and the α-field's grids beside it as `density` and `sdf_alpha`
- * (docs/notes-depth-fusion.md: why this is the default for run folders). */
+ * (docs/notes/depth-fusion.md: why this is the default for run folders). */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>

@@ -60,7 +60,7 @@ mgs_depth_3dgs *mgs_depth_3dgs_create(const mgs_gaussians *g, mgs_depth_source *
   s->s.sh_degree = g->sh_degree;
   out->render = render_3dgs;
   out->ctx = s;
-  out->preferred = MGS_DEPTH_MEDIAN; /* measured: docs/notes-depth-fusion.md */
+  out->preferred = MGS_DEPTH_MEDIAN; /* measured: docs/notes/depth-fusion.md */
   return s;
 }
 

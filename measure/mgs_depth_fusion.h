@@ -4,7 +4,7 @@
  * has one), fuse into a sparse TSDF (vdb/mgs_vdb_tsdf.h) and rebuild a valid narrow-band
  * level set of its zero crossing. Sizes default to multiples of the views' pixel
  * footprint (depth / focal length at the surface, median over the views): the
- * truncation that works depends on it, not on scene units (docs/notes-depth-fusion.md).
+ * truncation that works depends on it, not on scene units (docs/notes/depth-fusion.md).
  * Models plug in as a depth source, so 2DGS can provide its own depth. */
 #ifndef MGS_DEPTH_FUSION_H
 #define MGS_DEPTH_FUSION_H
@@ -43,7 +43,7 @@ typedef struct mgs_fusion_opts {
   int view_size;             /* their image side, px (256) */
   int iteration;             /* run folder: point_cloud/iteration_N (-1: latest) */
   int image_alpha;           /* use the dataset images' alpha as masks when available (1) */
-  int carve;                 /* background pixels carve free space (0: it erodes; docs/notes-depth-fusion.md) */
+  int carve;                 /* background pixels carve free space (0: it erodes; docs/notes/depth-fusion.md) */
 } mgs_fusion_opts;
 void mgs_fusion_opts_default(mgs_fusion_opts *o);
 

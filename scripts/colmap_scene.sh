@@ -37,7 +37,7 @@
 #   MIN_TRACK_LEN  when set, `colmap point_filtering --min_track_len N` on the final model
 #             [unset: COLMAP's output as convert.py leaves it]. Two-view points include a few
 #             far outliers (on the hinge, 7 of 1840 points lie 2-20x the object's radius
-#             away), which stretch the points' bounding box; see docs/notes-colmap.md
+#             away), which stretch the points' bounding box; see docs/notes/colmap.md
 #
 # Needs the Debian package `colmap` (3.8 in bookworm; CPU only here: *.use_gpu 0) and
 # oiiotool (openimageio-tools). Not part of the test suite.

@@ -429,7 +429,7 @@ void mgs_config_record(const mgs_train_config *c, mgs_settings *s) {
 
 void mgs_config_usage(FILE *f) {
   static const char *titles[MGS_GROUP_COUNT] = {
-    "run", "3DGS baseline (the reference's defaults)", "large scenes (docs/notes-scale.md)",
+    "run", "3DGS baseline (the reference's defaults)", "large scenes (docs/notes/scale.md)",
     "distributed: under mpirun -np K with --mpi", "MorseGS (lengths are fractions of the bounding-box diagonal)",
     "Topology-GS"};
   fprintf(f, "usage: morsegs train DATA -o RUN [options]\n"

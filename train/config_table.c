@@ -12,7 +12,7 @@
 #define CHG (MGS_OPT_RECORDED | MGS_OPT_CHANGEABLE)
 #define MPI MGS_OPT_MPI
 #define OPT MGS_OPT_OPTIONAL
-#define NOT_DIST "the distributed trainer has no global analysis or loss of this kind yet (docs/notes-scale.md)"
+#define NOT_DIST "the distributed trainer has no global analysis or loss of this kind yet (docs/notes/scale.md)"
 #define NOT_DIST_INIT "each rank initialises its block from the dataset's points"
 
 static const mgs_option TABLE[] = {
@@ -95,7 +95,7 @@ static const mgs_option TABLE[] = {
   {"freeze", "freeze", MGS_OPT_BOOL, F(freeze), "0", 0, 1, NULL, "1", MGS_GROUP_BASELINE, REC,
    "diagnostic: never update the parameters (test calibration)", "a diagnostic of the serial trainer"},
 
-  /* ---- large scenes (docs/notes-scale.md) ---- */
+  /* ---- large scenes (docs/notes/scale.md) ---- */
   {"visibility", "visibility", MGS_OPT_ENUM, F(visibility), "auto", 0, 0, "auto|on|off", NULL, MGS_GROUP_SCALE,
    REC | MPI, "project only the spatial tiles a view can see (auto: on when views see under half the model)", NULL},
   {"vis-tile", "vis_tile", MGS_OPT_DOUBLE, F(vis_tile), "0", 0, 1e30, NULL, NULL, MGS_GROUP_SCALE, REC | MPI,
@@ -180,7 +180,7 @@ static const mgs_option TABLE[] = {
 
   /* ---- Topology-GS ---- */
   {"lpvi-faithful", "lpvi_faithful", MGS_OPT_BOOL, F(lpvi_faithful), "0", 0, 1, NULL, "1", MGS_GROUP_TOPOGS, REC,
-   "the authors' LPVI (default: corrected, docs/notes-topogs.md)", NOT_DIST},
+   "the authors' LPVI (default: corrected, docs/notes/topogs.md)", NOT_DIST},
   {"lpvi-tau", "lpvi_tau", MGS_OPT_DOUBLE, F(lpvi_tau), "0.25", 0, 1e6, NULL, NULL, MGS_GROUP_TOPOGS, REC,
    "LPVI acceptance threshold", NOT_DIST},
   {"lpvi-max-edge", "lpvi_max_edge", MGS_OPT_DOUBLE, F(lpvi_max_edge), "2", 1e-12, 1e6, NULL, NULL, MGS_GROUP_TOPOGS,

@@ -37,7 +37,7 @@ typedef struct mgs_levelset_options {
   int levels;         /* level sets at kδ, k = −levels..levels (1: three sheets) */
   double delta;       /* spacing δ in voxels (1.0) */
   double flatness;    /* normal std-dev / tangent std-dev (0.1) */
-  double opacity;     /* initial α (0.1, the reference's; see docs/notes-morse-grad.md: flat
+  double opacity;     /* initial α (0.1, the reference's; see docs/notes/morse-grad.md: flat
                          Gaussians at 0.1 leave {A = 0.5} patchy at the start) */
   uint64_t seed;      /* sampling seed */
 } mgs_levelset_options;
@@ -72,7 +72,7 @@ mgs_status mgs_point_normals(const float *xyz, size_t n, int knn, float *normals
  * sub-voxel), colour the cosine-weighted mean of the views that see it unoccluded by the
  * hull. Where the images have no alpha (COLMAP / nerfstudio without masks): the centres of
  * the Gaussians that a short warm-up of the baseline from the random init made opaque
- * (docs/notes-morse.md, "Level-set init without a point file", says why). Images not
+ * (docs/notes/morse.md, "Level-set init without a point file", says why). Images not
  * loaded (image cache) are read one view at a time and released; the dataset is left as
  * it was. Only train views are used. */
 typedef struct mgs_view_points_options {

@@ -67,7 +67,7 @@ typedef struct mgs_morse_options {
                              are pruned (3; 0 = off) */
   /* MorseGS-R */
   mgs_morse_topo topo;
-  double beta;            /* weight of L_topo in units of ε_sig² (0.003, chosen by the sweep in docs/notes-morse.md; seed 0.001-0.01) */
+  double beta;            /* weight of L_topo in units of ε_sig² (0.003, chosen by the sweep in docs/notes/morse.md; seed 0.001-0.01) */
   unsigned dims;          /* dimensions in the loss, bit k = H_k (0x7) */
   double min_bar;         /* bars shorter than this many voxels stay out of the loss (0.5:
                              below the SDF's accuracy they are discretization noise) */

@@ -6,7 +6,7 @@
  *             textureless regions;
  *   random    the reference's 100k uniform points in [-1.3, 1.3]^3;
  *   levelset  --init levelset from the sfm and sfm-uneven points.
- * Prints the table docs/notes-morse-grad.md quotes; asserts that level sets from uneven
+ * Prints the table docs/notes/morse-grad.md quotes; asserts that level sets from uneven
  * points cover the sparse half better than the points themselves. */
 #include <math.h>
 #include <stdio.h>

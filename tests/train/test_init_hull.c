@@ -175,7 +175,7 @@ static void test_warmup(void) {
     CHECK_MSG(s.p95 < 6, "warm-up points far from the surface: p95 %.3f px", s.p95);
   }
   free(xyz), free(rgb);
-  /* for comparison (docs/notes-morse.md): the reference's random points, the other input
+  /* for comparison (docs/notes/morse.md): the reference's random points, the other input
      available without alpha */
   mgs_gaussians *rnd = NULL;
   CHECK_OK(mgs_init_random_for_dataset(ds, 100000, 0, 0, &rnd, &err), &err);

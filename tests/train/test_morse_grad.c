@@ -3,7 +3,7 @@
  * whole chain Gaussian parameters -> A at c -> SDF at the voxel -> loss (pairing fixed:
  * the voxels stay, their closest points are found again on the perturbed surface), on
  * scenes at tiny and huge scales, α near 0 and 1, near-singular covariances and a 1e5
- * offset. FD errors are printed (docs/notes-morse-grad.md quotes them). Also the grid
+ * offset. FD errors are printed (docs/notes/morse-grad.md quotes them). Also the grid
  * closest point from critical cells where ∇A vanishes (a blob's core, a gap's middle). */
 #include <math.h>
 #include <stdio.h>

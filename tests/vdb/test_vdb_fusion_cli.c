@@ -95,7 +95,7 @@ static void test_fusion_cli(void) {
   if (m) {
     /* the shell's opaque outside (~2 sigma beyond radius 1) for most of the surface (a
      * hollow shell: its inside fill stops at the margin of the observed box and leaves an
-     * inner sheet, and a few blobs sit behind grazing silhouettes: docs/notes-depth-fusion.md) */
+     * inner sheet, and a few blobs sit behind grazing silhouettes: docs/notes/depth-fusion.md) */
     double rmin = 1e9, rmax = 0;
     size_t on = 0;
     for (size_t i = 0; i < m->nv; i++) {

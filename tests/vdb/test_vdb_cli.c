@@ -17,23 +17,6 @@
 static const char *cli(void) { return getenv("MGS_CLI") ? getenv("MGS_CLI") : "../../apps/morsegs"; }
 static const char *src(void) { return getenv("MGS_SOURCE_DIR") ? getenv("MGS_SOURCE_DIR") : "../.."; }
 
-/* Runs a command with stderr captured into `errbuf`; returns the exit code. */
-static int run(const char *cmd, char *errbuf, size_t len) {
-  char full[8192];
-  snprintf(full, sizeof full, "%s 2> cli_stderr.txt", cmd);
-  fprintf(stderr, "  $ %s\n", cmd);
-  int rc = system(full);
-  errbuf[0] = 0;
-  FILE *f = fopen("cli_stderr.txt", "r");
-  if (f) {
-    size_t n = fread(errbuf, 1, len - 1, f);
-    errbuf[n] = 0;
-    fclose(f);
-  }
-  if (errbuf[0]) fprintf(stderr, "    stderr: %s", errbuf);
-  return rc == -1 ? -1 : WEXITSTATUS(rc);
-}
-
 static void write_sphere_ply(const char *path, size_t n) {
   mgs_gaussians *g = mgs_gaussians_create(n, 0);
   mgs_rng r;
@@ -75,7 +58,7 @@ static void test_cli_ok(void) {
   snprintf(mesh, sizeof mesh, "%s/sphere_mesh.ply", dir);
   write_sphere_ply(ply, 3000);
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s' -o '%s' --resolution 96 --tau 0.3 --mesh '%s'", cli(), ply, out, mesh);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   CHECK(mgs_path_exists(out) && mgs_path_exists(mesh));
   mgs_vdb_file_meta m;
   mgs_error err = {0};
@@ -85,20 +68,20 @@ static void test_cli_ok(void) {
   snprintf(vs, sizeof vs, "%.17g", m.voxel_size);
   snprintf(cmd, sizeof cmd, "/usr/bin/python3 '%s/tests/vdb/check_vdb.py' '%s' --voxel-size %s --tau 0.3 --source '%s'", src(),
            out, vs, ply);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   /* Refuses to overwrite; --force overwrites. */
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s' -o '%s' --resolution 64", cli(), ply, out);
-  CHECK(run(cmd, e, sizeof e) == 1);
+  CHECK(vt_run(cmd, e, sizeof e) == 1);
   CHECK(strstr(e, "exists") && strstr(e, "--force"));
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s' -o '%s' --resolution 64 --force --sdf-method sweep", cli(), ply, out);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   /* Usage errors exit 2. */
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s' -o '%s' --resolution -3", cli(), ply, out);
-  CHECK(run(cmd, e, sizeof e) == 2);
+  CHECK(vt_run(cmd, e, sizeof e) == 2);
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s'", cli(), ply);
-  CHECK(run(cmd, e, sizeof e) == 2);
+  CHECK(vt_run(cmd, e, sizeof e) == 2);
   snprintf(cmd, sizeof cmd, "'%s' vdb --help > /dev/null", cli());
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
 }
 
 static void expect_fail(const char *dir, const char *name, const char *const *rows, int nrows, const char *extra,
@@ -108,7 +91,7 @@ static void expect_fail(const char *dir, const char *name, const char *const *ro
   snprintf(out, sizeof out, "%s/%s.vdb", dir, name);
   write_ascii_ply(ply, rows, nrows);
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s' -o '%s' %s", cli(), ply, out, extra ? extra : "");
-  CHECK_MSG(run(cmd, e, sizeof e) == 1, "%s", name);
+  CHECK_MSG(vt_run(cmd, e, sizeof e) == 1, "%s", name);
   CHECK_MSG(strstr(e, needle) != NULL, "%s: '%s' not in: %s", name, needle, e);
   CHECK_MSG(strstr(e, name) != NULL, "%s: the file is not named in: %s", name, e);
   CHECK_MSG(strstr(e, "morsegs vdb: ") != NULL, "%s", e);
@@ -131,7 +114,7 @@ static void test_cli_bad_input(void) {
   expect_fail(dir, "budget", r_ok, 3, "--resolution 200000 --mem-budget 0.05", "estimated");
   char cmd[1024], e[4096];
   snprintf(cmd, sizeof cmd, "'%s' vdb '%s/missing.ply' -o '%s/x.vdb'", cli(), dir, dir);
-  CHECK(run(cmd, e, sizeof e) == 1 && strstr(e, "missing.ply"));
+  CHECK(vt_run(cmd, e, sizeof e) == 1 && strstr(e, "missing.ply"));
 }
 
 int main(void) {

@@ -19,22 +19,6 @@
 
 static const char *cli(void) { return getenv("MGS_CLI") ? getenv("MGS_CLI") : "../../apps/morsegs"; }
 
-static int run(const char *cmd, char *errbuf, size_t len) {
-  char full[8192];
-  snprintf(full, sizeof full, "%s > cli_out.txt 2> cli_stderr.txt", cmd);
-  fprintf(stderr, "  $ %s\n", cmd);
-  int rc = system(full);
-  errbuf[0] = 0;
-  FILE *f = fopen("cli_stderr.txt", "r");
-  if (f) {
-    size_t n = fread(errbuf, 1, len - 1, f);
-    errbuf[n] = 0;
-    fclose(f);
-  }
-  if (errbuf[0]) fprintf(stderr, "    stderr: %s", errbuf);
-  return rc == -1 ? -1 : WEXITSTATUS(rc);
-}
-
 static void write_shell(const char *path) {
   mgs_gaussians *g = mgs_gaussians_create(0, 0);
   mgs_rng r;
@@ -87,7 +71,7 @@ static void test_fusion_cli(void) {
   write_cameras(cams, 24, 0);
 
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/a.vdb --mesh %s/a.ply", cli(), run_dir, dir, dir);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   mgs_mesh *m = NULL;
   char path[700];
   snprintf(path, sizeof path, "%s/a.ply", dir);
@@ -110,7 +94,7 @@ static void test_fusion_cli(void) {
     mgs_mesh_destroy(m);
   }
   snprintf(cmd, sizeof cmd, "%s persistence %s/a.vdb -o %s/pers", cli(), dir, dir);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   /* (a hollow shell seen from outside: the fill of its inside may stop at the shell, so
    * no Betti numbers are asserted; the band must be valid, which persistence checks) */
   CHECK(mgs_test_sh("cat cli_out.txt cli_stderr.txt | grep -q \"grid 'sdf' (level set\"") == 0);
@@ -123,13 +107,13 @@ static void test_fusion_cli(void) {
   /* no cameras.json: virtual views, said so */
   remove(cams);
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/b.vdb --views 20 --no-alpha", cli(), run_dir, dir);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
   CHECK(strstr(e, "no cameras.json") && strstr(e, "virtual views"));
 
   /* cameras that see nothing: error, no output */
   write_cameras(cams, 8, 1);
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/c.vdb --mesh %s/c.ply", cli(), run_dir, dir, dir);
-  CHECK(run(cmd, e, sizeof e) != 0);
+  CHECK(vt_run(cmd, e, sizeof e) != 0);
   CHECK(strstr(e, "none of the 8 views sees the model") != NULL);
   snprintf(path, sizeof path, "%s/c.vdb", dir);
   CHECK(!mgs_path_exists(path));
@@ -141,12 +125,12 @@ static void test_fusion_cli(void) {
   fprintf(f, "[{\"id\": 0, \"width\": 64}]");
   fclose(f);
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/d.vdb", cli(), run_dir, dir);
-  CHECK(run(cmd, e, sizeof e) != 0);
+  CHECK(vt_run(cmd, e, sizeof e) != 0);
   CHECK(strstr(e, "cameras.json: camera 0") != NULL);
 
   /* a bare .ply with --from-depth: virtual views */
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/e.vdb --from-depth --views 16 --no-alpha", cli(), ply, dir);
-  CHECK(run(cmd, e, sizeof e) == 0);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
 }
 
 int main(void) {

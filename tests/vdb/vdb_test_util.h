@@ -2,6 +2,8 @@
 #ifndef VDB_TEST_UTIL_H
 #define VDB_TEST_UTIL_H
 #include <math.h>
+#include <stdio.h>
+#include <sys/wait.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/mgs_gaussians.h"
@@ -9,6 +11,24 @@
 #include "vdb/mgs_vdb.h"
 
 /* Appends a Gaussian with std-devs s, rotation q (w,x,y,z), opacity alpha. */
+/* Runs a CLI command with stdout into cli_out.txt and stderr into cli_stderr.txt (also
+ * copied into errbuf, and echoed); returns the exit code. */
+static inline int vt_run(const char *cmd, char *errbuf, size_t len) {
+  char full[8192];
+  snprintf(full, sizeof full, "%s > cli_out.txt 2> cli_stderr.txt", cmd);
+  fprintf(stderr, "  $ %s\n", cmd);
+  int rc = system(full);
+  errbuf[0] = 0;
+  FILE *f = fopen("cli_stderr.txt", "r");
+  if (f) {
+    size_t n = fread(errbuf, 1, len - 1, f);
+    errbuf[n] = 0;
+    fclose(f);
+  }
+  if (errbuf[0]) fprintf(stderr, "    stderr: %s", errbuf);
+  return rc == -1 ? -1 : WEXITSTATUS(rc);
+}
+
 static inline void vt_add(mgs_gaussians *g, double x, double y, double z, const double s[3], const double q[4],
                           double alpha) {
   size_t i = 0;

@@ -47,6 +47,17 @@ static long count_floaters(const mgs_gaussians *g, const mgs_mesh *gt, size_t *l
   return count;
 }
 
+void mgs_eval_geometry_add_metrics(void *cjson_object, const void *metrics) {
+  cJSON *obj = cjson_object;
+  const mgs_geometry_metrics *gm = metrics;
+  cJSON_AddNumberToObject(obj, "chamfer", gm->chamfer);
+  cJSON_AddNumberToObject(obj, "chamfer_accuracy", gm->accuracy);
+  cJSON_AddNumberToObject(obj, "chamfer_completeness", gm->completeness);
+  cJSON_AddNumberToObject(obj, "fscore", gm->fscore);
+  cJSON_AddNumberToObject(obj, "precision", gm->precision);
+  cJSON_AddNumberToObject(obj, "recall", gm->recall);
+}
+
 int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
                       size_t table_len) {
   cJSON *obj = (cJSON *)cjson_object_out;
@@ -101,12 +112,7 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
   if (obj) {
     cJSON_AddStringToObject(obj, "gt_mesh", gt_mesh_path);
     if (have_surface) {
-      cJSON_AddNumberToObject(obj, "chamfer", gm.chamfer);
-      cJSON_AddNumberToObject(obj, "chamfer_accuracy", gm.accuracy);
-      cJSON_AddNumberToObject(obj, "chamfer_completeness", gm.completeness);
-      cJSON_AddNumberToObject(obj, "fscore", gm.fscore);
-      cJSON_AddNumberToObject(obj, "precision", gm.precision);
-      cJSON_AddNumberToObject(obj, "recall", gm.recall);
+      mgs_eval_geometry_add_metrics(obj, &gm);
     } else {
       cJSON_AddNullToObject(obj, "chamfer");
       cJSON_AddNullToObject(obj, "fscore");

@@ -45,12 +45,7 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
   long chi = 0;
   size_t pieces = mgs_mesh_pieces(surf, &chi);
   if (obj) {
-    cJSON_AddNumberToObject(obj, "chamfer", gm.chamfer);
-    cJSON_AddNumberToObject(obj, "chamfer_accuracy", gm.accuracy);
-    cJSON_AddNumberToObject(obj, "chamfer_completeness", gm.completeness);
-    cJSON_AddNumberToObject(obj, "fscore", gm.fscore);
-    cJSON_AddNumberToObject(obj, "precision", gm.precision);
-    cJSON_AddNumberToObject(obj, "recall", gm.recall);
+    mgs_eval_geometry_add_metrics(obj, &gm);
     cJSON_AddStringToObject(obj, "depth", rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected");
     cJSON_AddNumberToObject(obj, "views", (double)rep.views);
     cJSON_AddBoolToObject(obj, "virtual_views", rep.virtual_views);

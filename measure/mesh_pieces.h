@@ -1,6 +1,6 @@
 /* Connected pieces (triangles sharing vertices) and Euler characteristic V - E + F of a
  * triangle mesh, for the geometry reports (the issue's "76 pieces, chi = -247" of the
- * alpha-surface vs a single genus-2 surface, chi = -2). Internal to apps/. */
+ * alpha-surface vs a single genus-2 surface, chi = -2). Internal to measure/. */
 #ifndef MGS_MESH_PIECES_H
 #define MGS_MESH_PIECES_H
 #include <stdint.h>

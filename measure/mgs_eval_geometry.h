@@ -10,6 +10,10 @@
 #define MGS_EVAL_GEOMETRY_H
 #include <stddef.h>
 
+/* Chamfer (and its two directions), F-score, precision and recall of `metrics` (a
+ * const mgs_geometry_metrics *, render/mgs_mesh_distance.h) into a cJSON object (void *):
+ * the same keys for both surfaces. */
+void mgs_eval_geometry_add_metrics(void *cjson_object, const void *metrics);
 int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
                       size_t table_len);
 /* The same for the surface of the model's depth fused at the run's cameras

@@ -26,7 +26,7 @@ static void usage(FILE *f) {
     "                         alpha-field's surface and the depth-fused one (morsegs vdb RUN)\n"
     "      --no-images        do not write the side-by-side PNGs\n"
     "      --max-views N      evaluate at most N views (evenly spaced)\n"
-    "      --depth median|expected, --fuse-voxel F, --trunc F, --min-weight W, --carve\n"
+    "      --depth median|expected, --fuse-voxel F, --trunc F, --trunc-back F, --trunc-thin F, --min-weight W, --carve\n"
     "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
     "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n");
 }
@@ -54,6 +54,7 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"max-views", required_argument, 0, 'v'}, {"help", no_argument, 0, 'h'},
                                        {"depth", required_argument, 0, 'Z'}, {"fuse-voxel", required_argument, 0, 'x'},
                                        {"trunc", required_argument, 0, 'T'}, {"min-weight", required_argument, 0, 'W'},
+                                       {"trunc-back", required_argument, 0, 'B'}, {"trunc-thin", required_argument, 0, 'N'},
                                        {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
                                        {0, 0, 0, 0}};
   const char *split_s = "test", *mesh = NULL;
@@ -80,11 +81,12 @@ int mgs_cmd_eval(int argc, char **argv) {
         else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;
         else { fprintf(stderr, "morsegs eval: --depth '%s': expected median or expected\n", optarg); return 2; }
         break;
-      case 'x': case 'T': case 'W': {
+      case 'x': case 'T': case 'W': case 'B': case 'N': {
+        if (c == 'N' && !strcmp(optarg, "0")) { fo.thin_fp = 0; break; }
         char *end;
         double v = strtod(optarg, &end);
         if (!*optarg || *end || !(v > 0) || v > 1e6) { fprintf(stderr, "morsegs eval: '%s' must be a positive number\n", optarg); return 2; }
-        if (c == 'x') fo.voxel_fp = v; else if (c == 'T') fo.trunc_fp = v; else fo.min_weight = (float)v;
+        if (c == 'x') fo.voxel_fp = v; else if (c == 'T') fo.trunc_fp = v; else if (c == 'B') fo.trunc_back_fp = v; else if (c == 'N') fo.thin_fp = v; else fo.min_weight = (float)v;
         break;
       }
       case 'h': usage(stdout); return 0;

@@ -36,6 +36,8 @@ static void usage(FILE *f) {
           "  --depth median|expected  depth map fused (default: the model's, median for 3DGS)\n"
           "  --fuse-voxel F           fusion voxel size in pixel footprints of the views (1)\n"
           "  --trunc F                truncation in pixel footprints (9)\n"
+          "  --trunc-thin F           thin parts: a second fusion at F footprints where the wide one merges\n"
+          "                           two sides of a part (2; 0 = off)\n"
           "  --fuse-voxel-size H, --trunc-size T   the same in world units (override)\n"
           "  --min-weight W           views a voxel needs to count as observed (1)\n"
           "  --carve                  background pixels carve free space (off: it erodes surfaces)\n"
@@ -79,6 +81,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"no-alpha", no_argument, 0, 'N'},         {"iteration", required_argument, 0, 'I'},
       {"views", required_argument, 0, 'V'},      {"depth", required_argument, 0, 'Z'},
       {"fuse-voxel", required_argument, 0, 'x'}, {"trunc", required_argument, 0, 'T'},
+      {"trunc-thin", required_argument, 0, 'K'},
       {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
       {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
       {"help", no_argument, 0, 'H'},              {0, 0, 0, 0}};
@@ -180,6 +183,13 @@ int mgs_cmd_vdb(int argc, char **argv) {
         if (dst) *dst = v; else fo.min_weight = (float)v;
         break;
       }
+      case 'K':
+        if (!parse_double(optarg, &v) || !(v >= 0) || v > 1e9) {
+          fprintf(stderr, "morsegs vdb: --trunc-thin '%s' must be a number >= 0\n", optarg);
+          return 2;
+        }
+        fo.thin_fp = v;
+        break;
       case 'H': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }

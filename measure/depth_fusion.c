@@ -20,6 +20,7 @@ void mgs_fusion_opts_default(mgs_fusion_opts *o) {
   o->depth = -1;
   o->voxel_fp = MGS_FUSION_VOXEL_FP;
   o->trunc_fp = MGS_FUSION_TRUNC_FP;
+  o->thin_fp = MGS_FUSION_THIN_FP; /* measured: thin 0.0475 -> 0.0228, genus2/sphere unchanged (docs/notes/depth-fusion.md) */
   o->half_width = 3;
   o->min_weight = 1;
   o->alpha_mask = 0.5f;
@@ -202,10 +203,16 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
     mgs_warn("depth fusion: truncation %g below the voxel size %g; raised to it", rep->truncation, rep->voxel_size);
     rep->truncation = rep->voxel_size;
   }
+  rep->truncation_back = o->trunc_back_fp > 0 ? o->trunc_back_fp * rep->footprint : rep->truncation;
+  if (rep->truncation_back < rep->voxel_size) rep->truncation_back = rep->voxel_size;
+  if (rep->truncation_back > rep->truncation) rep->truncation_back = rep->truncation;
   mgs_vdb_tsdf_params tp;
   memset(&tp, 0, sizeof tp);
   tp.voxel_size = rep->voxel_size;
   tp.truncation = rep->truncation;
+  tp.truncation_back = rep->truncation_back;
+  rep->truncation_thin = o->thin_fp > 0 ? fmin(fmax(o->thin_fp * rep->footprint, rep->voxel_size), rep->truncation) : 0;
+  tp.truncation_thin = rep->truncation_thin;
   {
     /* the lattice near the views' target: the mean of the camera centres snapped to
      * 64 voxels (float precision of the leaves far from the origin) */
@@ -232,6 +239,7 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   rep->blocks = info.blocks;
   rep->observed = info.voxels_observed;
   if ((st = mgs_vdb_tsdf_to_sdf(t, o->half_width, o->min_weight, sdf, err))) goto done;
+  rep->thin_voxels = mgs_vdb_tsdf_thin_voxels(t);
   rep->band_voxels = mgs_vdb_grid_active_voxel_count(*sdf);
   if (rep->band_voxels == 0) {
     mgs_vdb_grid_destroy(*sdf);

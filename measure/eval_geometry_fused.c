@@ -54,6 +54,9 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
     cJSON_AddNumberToObject(obj, "truncation", rep.truncation);
     cJSON_AddNumberToObject(obj, "voxel_footprints", rep.voxel_size / rep.footprint);
     cJSON_AddNumberToObject(obj, "truncation_footprints", rep.truncation / rep.footprint);
+    cJSON_AddNumberToObject(obj, "truncation_back_footprints", rep.truncation_back / rep.footprint);
+    cJSON_AddNumberToObject(obj, "truncation_thin_footprints", rep.truncation_thin / rep.footprint);
+    cJSON_AddNumberToObject(obj, "thin_voxels", (double)rep.thin_voxels);
     cJSON_AddNumberToObject(obj, "min_weight", fo.min_weight);
     cJSON_AddNumberToObject(obj, "surface_triangles", (double)surf->nt);
     cJSON_AddNumberToObject(obj, "surface_pieces", (double)pieces);

@@ -31,10 +31,13 @@ void mgs_depth_3dgs_destroy(mgs_depth_3dgs *s);
 
 #define MGS_FUSION_VOXEL_FP 1.0  /* voxel size, pixel footprints */
 #define MGS_FUSION_TRUNC_FP 9.0  /* truncation, pixel footprints */
+#define MGS_FUSION_THIN_FP 2.0   /* thin-part truncation, pixel footprints */
 
 typedef struct mgs_fusion_opts {
   int depth;                 /* mgs_depth_kind, or -1: the source's preferred */
   double voxel_fp, trunc_fp; /* in pixel footprints */
+  double trunc_back_fp;      /* behind the surface, pixel footprints (0: = trunc_fp) */
+  double thin_fp;            /* thin-part truncation, pixel footprints (0: off; mgs_vdb_tsdf_params) */
   double voxel_size, truncation; /* world units, override the footprint multiples when > 0 */
   int half_width;            /* band of the level set, voxels (3) */
   float min_weight;          /* views a voxel needs to count as observed (1) */
@@ -52,7 +55,8 @@ typedef struct mgs_fusion_report {
   size_t image_masks;         /* views masked by their image's alpha too */
   int virtual_views;          /* 1 if the views were virtual */
   int depth;                  /* the depth kind used */
-  double footprint, voxel_size, truncation;
+  double footprint, voxel_size, truncation, truncation_back, truncation_thin;
+  size_t thin_voxels;        /* level-set voxels taken from the thin-part fusion */
   size_t blocks, observed, band_voxels;
   double seconds;
   char ply[1024];             /* the model fused */

@@ -8,8 +8,8 @@
  * Fusion follows the field's standard (KinectFusion; Open3D's ScalableTSDFVolume, which a
  * slow test compares with): only the 8^3 blocks that some pixel's ray passes within the
  * truncation t of its depth are allocated; a voxel at camera depth z that projects onto
- * pixel (u, v) with depth d > 0 and d - z > -t along the ray (d - z times the ray's length
- * per unit z) takes min(d - z, t) into a running average with weight 1 per view. Values
+ * pixel (u, v) with depth d > 0 and d - z > -t_back along the ray (d - z times the ray's
+ * length per unit z; t_back = t unless set) takes min(d - z, t) into a running average with weight 1 per view. Values
  * are world units. Integration is parallel over blocks (each loops over the views). */
 #ifndef MGS_VDB_TSDF_H
 #define MGS_VDB_TSDF_H
@@ -26,6 +26,20 @@ typedef struct mgs_vdb_tsdf_params {
   double voxel_size;   /* world units (> 0) */
   double truncation;   /* world units, >= voxel_size */
   double origin[3];    /* the grid's translation (a point near the scene: precision) */
+  double truncation_back; /* behind the surface, world units, in [voxel_size, truncation]; 0: the
+                             same as truncation (symmetric). A voxel further behind a view's depth
+                             than this takes no update from that view */
+  /* Thin parts (0: off). A truncation wider than a part fuses the views of its two sides
+   * into one slab as wide as the truncation (docs/notes/depth-fusion.md). With
+   * truncation_thin > 0 a second fusion at that (narrow) truncation runs in the same pass,
+   * and each voxel counts the views that see it as free space by more than twice it. Where
+   * the wide fusion calls a voxel inside although at least thin_free_views views (and a
+   * share thin_free_share of its views) see it as clearly free, the wide fusion has merged
+   * two sides: around such voxels (within the wide truncation) the level set takes the
+   * narrow fusion instead. */
+  double truncation_thin;  /* world units, in [voxel_size, truncation] or 0 */
+  double thin_free_views;  /* >= 1 (2 when 0) */
+  double thin_free_share;  /* in [0, 1] (0.5 when 0) */
 } mgs_vdb_tsdf_params;
 
 typedef struct mgs_vdb_tsdf mgs_vdb_tsdf;
@@ -63,6 +77,9 @@ mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vd
  * surface: MGS_ERR_FORMAT. */
 mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width, float min_weight, mgs_vdb_grid **out,
                                mgs_error *err);
+
+/* Voxels the last mgs_vdb_tsdf_to_sdf took from the thin-part (narrow) fusion. */
+size_t mgs_vdb_tsdf_thin_voxels(const mgs_vdb_tsdf *t);
 
 #ifdef __cplusplus
 }

@@ -18,6 +18,9 @@ struct mgs_vdb_tsdf {
   mgs_vdb_tsdf_params p;
   math::Transform::Ptr xf;
   FloatTree::Ptr value, weight;
+  // with truncation_thin: the narrow fusion and the views seeing a voxel as clearly free
+  FloatTree::Ptr thin_value, thin_weight, free_views;
+  mutable size_t thin_voxels = 0;  // voxels the last level set took from the narrow fusion
 };
 
 namespace {
@@ -33,23 +36,27 @@ inline double ray_scale(const mgs_camera &c, int px, int py) {
   return std::sqrt(1 + a * a + b * b);
 }
 
+inline double back_truncation(const mgs_vdb_tsdf_params &p) {
+  return p.truncation_back > 0 ? p.truncation_back : p.truncation;
+}
+
 inline bool valid_depth(float d) { return d > 0 && std::isfinite(d); }
 
 // Keys (origin / 8) of the blocks the segment of each valid pixel's ray within the
 // truncation of its depth passes through (sampled every half voxel).
 void collect_blocks(const mgs_vdb_tsdf &t, const View &v, std::vector<Coord> &keys, size_t &pixels) {
   const mgs_camera &c = *v.cam;
-  const double h = t.p.voxel_size, tr = t.p.truncation;
+  const double h = t.p.voxel_size, tr = t.p.truncation, tb = back_truncation(t.p);
   const double *R = c.c2w;  // row-major: world = R x + translation
   for (int py = 0; py < c.height; py++)
     for (int px = 0; px < c.width; px++) {
       const float d = v.depth[(size_t)py * c.width + px];
       if (!valid_depth(d)) continue;
       pixels++;
-      const double m = ray_scale(c, px, py), dz = tr / m;  // |d - z| m <= t
+      const double m = ray_scale(c, px, py), dz = tr / m, dzb = tb / m;  // -t_back <= (d - z) m <= t
       const double a = (px + 0.5 - c.cx) / c.fx, b = (py + 0.5 - c.cy) / c.fy;
       const double dir[3] = {R[0] * a + R[1] * b + R[2], R[4] * a + R[5] * b + R[6], R[8] * a + R[9] * b + R[10]};
-      const double z0 = std::max((double)d - dz, 1e-6), z1 = (double)d + dz;
+      const double z0 = std::max((double)d - dz, 1e-6), z1 = (double)d + dzb;
       const int steps = (int)std::ceil((z1 - z0) * m / (0.5 * h)) + 1;
       Coord last(INT32_MAX, 0, 0);
       for (int s = 0; s <= steps; s++) {
@@ -78,10 +85,14 @@ bool block_seen(const mgs_vdb_tsdf &t, const mgs_camera &c, const Coord &o) {
   return u + ru >= 0 && u - ru <= c.width && v + rv >= 0 && v - rv <= c.height;
 }
 
-void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, FloatTree::LeafNodeType &dl,
-                FloatTree::LeafNodeType &wl) {
+struct BlockLeaves {
+  FloatTree::LeafNodeType *d, *w, *td, *tw, *fv;  // td/tw/fv: NULL without truncation_thin
+};
+
+void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, const BlockLeaves &b) {
+  FloatTree::LeafNodeType &dl = *b.d, &wl = *b.w;
   const double h = t.p.voxel_size;
-  const float tr = (float)t.p.truncation;
+  const float tr = (float)t.p.truncation, tb = (float)back_truncation(t.p), tn = (float)t.p.truncation_thin;
   const Coord o = dl.origin();
   for (const View &v : views) {
     const mgs_camera &c = *v.cam;
@@ -101,9 +112,16 @@ void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, FloatTree
       const float d = v.depth[(size_t)py * c.width + px];
       // d < 0: a background pixel, free space along its whole ray (carving)
       const double sdf = d < 0 ? (double)tr : valid_depth(d) ? ((double)d - z) * ray_scale(c, px, py) : NAN;
-      if (!(sdf > -tr)) continue;
-      const float val = (float)std::min(sdf, (double)tr);
       const Index off = it.pos();
+      if (b.td && sdf > -tn) {
+        const float val = (float)std::min(sdf, (double)tn);
+        const float W = b.tw->getValue(off), D = b.td->getValue(off);
+        b.td->setValueOn(off, (D * W + val) / (W + 1));
+        b.tw->setValueOn(off, W + 1);
+        if (sdf > 2.0 * tn) b.fv->setValueOn(off, b.fv->getValue(off) + 1);
+      }
+      if (!(sdf > -tb)) continue;
+      const float val = (float)std::min(sdf, (double)tr);
       const float W = wl.getValue(off), D = dl.getValue(off);
       dl.setValueOn(off, (D * W + val) / (W + 1));
       wl.setValueOn(off, W + 1);
@@ -111,7 +129,54 @@ void fuse_block(const mgs_vdb_tsdf &t, const std::vector<View> &views, FloatTree
   }
 }
 
+// Thin parts: voxels the wide fusion calls inside although enough views see them as
+// clearly free (the two sides of a part thinner than the truncation fused into one slab),
+// grown by the wide truncation (the slab's reach), take the narrow fusion's value (scaled
+// to the wide truncation, so the level set's field 1/2 - D/(2t) keeps its zero) and weight.
+// value/weight become copies when anything is switched.
+void thin_parts(const mgs_vdb_tsdf &t, float min_weight, FloatTree::Ptr &value, FloatTree::Ptr &weight) {
+  const float min_views = t.p.thin_free_views > 0 ? (float)t.p.thin_free_views : 2.0f;
+  const float share = t.p.thin_free_share > 0 ? (float)t.p.thin_free_share : 0.5f;
+  MaskTree conflict(false);
+  {
+    tree::ValueAccessor<const FloatTree> va(*t.value), fa(*t.free_views);
+    tree::ValueAccessor<MaskTree> ca(conflict);
+    for (auto it = t.weight->cbeginValueOn(); it; ++it) {
+      if (!(*it >= min_weight)) continue;
+      const Coord c = it.getCoord();
+      const float f = fa.getValue(c);
+      if (va.getValue(c) < 0 && f >= min_views && f >= share * *it) ca.setValueOn(c);
+    }
+  }
+  if (conflict.activeVoxelCount() == 0) return;
+  const int grow = (int)std::ceil(t.p.truncation / t.p.voxel_size) + 1;
+  tools::dilateActiveValues(conflict, grow, tools::NN_FACE_EDGE_VERTEX, tools::IGNORE_TILES);
+  auto v = std::make_shared<FloatTree>(*t.value), w = std::make_shared<FloatTree>(*t.weight);
+  tree::ValueAccessor<FloatTree> va(*v), wa(*w);
+  tree::ValueAccessor<const FloatTree> tva(*t.thin_value), twa(*t.thin_weight);
+  const float scale = (float)(t.p.truncation / t.p.truncation_thin);
+  size_t n = 0;
+  for (auto it = conflict.cbeginValueOn(); it; ++it) {
+    const Coord c = it.getCoord();
+    if (!wa.isValueOn(c) && !twa.isValueOn(c)) continue;
+    const float tw = twa.getValue(c);
+    if (tw > 0) {
+      va.setValueOn(c, tva.getValue(c) * scale);
+      wa.setValueOn(c, tw);
+    } else {  // unobserved at the narrow truncation: left to the inside fill
+      va.setValueOff(c, (float)t.p.truncation);
+      wa.setValueOff(c, 0.0f);
+    }
+    n++;
+  }
+  t.thin_voxels = n;
+  value = v;
+  weight = w;
+}
+
 }  // namespace
+
+extern "C" size_t mgs_vdb_tsdf_thin_voxels(const mgs_vdb_tsdf *t) { return t ? t->thin_voxels : 0; }
 
 extern "C" mgs_status mgs_vdb_tsdf_create(const mgs_vdb_tsdf_params *p, mgs_vdb_tsdf **out, mgs_error *err) {
   *out = nullptr;
@@ -119,6 +184,18 @@ extern "C" mgs_status mgs_vdb_tsdf_create(const mgs_vdb_tsdf_params *p, mgs_vdb_
       !std::isfinite(p->truncation))
     return mgs_error_set(err, MGS_ERR_ARG, "tsdf: voxel size %g and truncation %g: need 0 < voxel <= truncation",
                          p ? p->voxel_size : 0.0, p ? p->truncation : 0.0);
+  if (p->truncation_thin != 0 &&
+      !(p->truncation_thin >= p->voxel_size && p->truncation_thin <= p->truncation && std::isfinite(p->truncation_thin)))
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: thin-part truncation %g: need voxel %g <= it <= truncation %g (or 0)",
+                         p->truncation_thin, p->voxel_size, p->truncation);
+  if (!(p->thin_free_views == 0 || (p->thin_free_views >= 1 && std::isfinite(p->thin_free_views))) ||
+      !(p->thin_free_share >= 0 && p->thin_free_share <= 1))
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: thin-part views %g / share %g: need views >= 1 (or 0), share in [0, 1]",
+                         p->thin_free_views, p->thin_free_share);
+  if (p->truncation_back != 0 &&
+      !(p->truncation_back >= p->voxel_size && p->truncation_back <= p->truncation && std::isfinite(p->truncation_back)))
+    return mgs_error_set(err, MGS_ERR_ARG, "tsdf: back truncation %g: need voxel %g <= it <= truncation %g (or 0)",
+                         p->truncation_back, p->voxel_size, p->truncation);
   for (int i = 0; i < 3; i++)
     if (!std::isfinite(p->origin[i])) return mgs_error_set(err, MGS_ERR_ARG, "tsdf: origin not finite");
   mgs_vdb_detail::init();
@@ -128,6 +205,11 @@ extern "C" mgs_status mgs_vdb_tsdf_create(const mgs_vdb_tsdf_params *p, mgs_vdb_
     t->xf = mgs_vdb_detail::make_transform(p->voxel_size, p->origin);
     t->value = std::make_shared<FloatTree>((float)p->truncation);
     t->weight = std::make_shared<FloatTree>(0.0f);
+    if (p->truncation_thin > 0) {
+      t->thin_value = std::make_shared<FloatTree>((float)p->truncation_thin);
+      t->thin_weight = std::make_shared<FloatTree>(0.0f);
+      t->free_views = std::make_shared<FloatTree>(0.0f);
+    }
     *out = t;
   } catch (const std::exception &e) {
     return mgs_error_set(err, MGS_ERR_NOMEM, "tsdf: %s", e.what());
@@ -163,16 +245,19 @@ extern "C" mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mg
         const Coord o(c[0] * 8, c[1] * 8, c[2] * 8);
         t->value->touchLeaf(o);
         t->weight->touchLeaf(o);
+        if (t->thin_value) t->thin_value->touchLeaf(o), t->thin_weight->touchLeaf(o), t->free_views->touchLeaf(o);
       }
     keys.clear();
-    std::vector<FloatTree::LeafNodeType *> dl, wl;
+    std::vector<BlockLeaves> dl;
     for (auto it = t->value->beginLeaf(); it; ++it) {
-      dl.push_back(&*it);
-      wl.push_back(t->weight->probeLeaf(it->origin()));
+      const Coord o = it->origin();
+      BlockLeaves b{&*it, t->weight->probeLeaf(o), nullptr, nullptr, nullptr};
+      if (t->thin_value) b.td = t->thin_value->probeLeaf(o), b.tw = t->thin_weight->probeLeaf(o), b.fv = t->free_views->probeLeaf(o);
+      dl.push_back(b);
     }
     if (!used.empty())
       mgs_vdb_detail::parallel_for(0, dl.size(), 4, [&](size_t b, size_t e) {
-        for (size_t i = b; i < e; i++) fuse_block(*t, used, *dl[i], *wl[i]);
+        for (size_t i = b; i < e; i++) fuse_block(*t, used, dl[i]);
       });
     if (info) {
       info->views_used = used.size();
@@ -215,12 +300,15 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
     return mgs_error_set(err, MGS_ERR_ARG, "tsdf: band half-width %d outside [1, 1000] voxels", half_width);
   const float tr = (float)t->p.truncation;
   try {
+    FloatTree::Ptr value = t->value, weight = t->weight;
+    t->thin_voxels = 0;
+    if (t->thin_value) thin_parts(*t, min_weight, value, weight);
     // observed (weight >= min_weight) voxels, split by sign
     MaskTree obs(false), pos(false), neg(false);
     {
-      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<const FloatTree> va(*value);
       tree::ValueAccessor<MaskTree> oa(obs), pa(pos), na(neg);
-      for (auto it = t->weight->cbeginValueOn(); it; ++it) {
+      for (auto it = weight->cbeginValueOn(); it; ++it) {
         if (!(*it >= min_weight)) continue;
         const Coord c = it.getCoord();
         oa.setValueOn(c);
@@ -273,7 +361,7 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
     // 1/2 - D/(2t) on observed voxels (> 1/2 inside), 1 on the grown inside, 0 elsewhere.
     auto field = std::make_shared<FloatTree>(0.0f);
     {
-      tree::ValueAccessor<const FloatTree> va(*t->value);
+      tree::ValueAccessor<const FloatTree> va(*value);
       tree::ValueAccessor<FloatTree> fa(*field);
       tree::ValueAccessor<const MaskTree> ob(obs);
       const float inv = 1.0f / (2 * tr);

@@ -1,6 +1,9 @@
 /* TSDF fusion (vdb/mgs_vdb_tsdf.h) on exact depth maps of an analytic torus:
  *   - the fused level set is a valid narrow band (topo/mgs_levelset_check.h: what
  *     `morsegs persistence` demands) whose zero level set lies on the torus;
+ *   - a plate thinner than the truncation: the two sides fuse into a slab as wide as the
+ *     truncation unless the thin-part fusion is on (truncation_thin), which puts the level
+ *     set back on the plate's faces;
  *   - bad input: all-background maps, cameras that see nothing -> clear errors;
  *   - with --open3d (slow): the same maps fused by Open3D's ScalableTSDFVolume (Debian's
  *     python3-open3d, tests/vdb/tsdf_open3d.py): mesh-to-mesh Chamfer within half a voxel. */
@@ -28,6 +31,16 @@ static double torus(const double p[3]) {
   return sqrt(q * q + p[2] * p[2]) - R_MINOR;
 }
 
+#define PLATE_T (2 * VOXEL) /* thickness: below the truncation (5 voxels) */
+static double plate(const double p[3]) { /* box |x|, |y| <= 0.5, |z| <= PLATE_T / 2 */
+  double q[3] = {fabs(p[0]) - 0.5, fabs(p[1]) - 0.5, fabs(p[2]) - PLATE_T / 2}, o = 0;
+  for (int i = 0; i < 3; i++) o += q[i] > 0 ? q[i] * q[i] : 0;
+  double in = fmax(q[0], fmax(q[1], q[2]));
+  return sqrt(o) + (in < 0 ? in : 0);
+}
+
+static double (*g_shape)(const double p[3]) = torus;
+
 static void cameras(mgs_camera *cams, int n, double dist) {
   const double golden = M_PI * (3.0 - sqrt(5.0));
   for (int i = 0; i < n; i++) {
@@ -48,7 +61,7 @@ static void render_depth(const mgs_camera *c, float *depth) {
       int hit = 0;
       for (int it = 0; it < 1000 && s < 10; it++) {
         double p[3] = {o[0] + s * d[0], o[1] + s * d[1], o[2] + s * d[2]};
-        double f = torus(p);
+        double f = g_shape(p);
         if (f < 1e-7) { hit = 1; break; }
         s += f;
       }
@@ -65,7 +78,7 @@ static mgs_camera g_cams[NV];
 static float *g_depth[NV];
 
 static mgs_vdb_grid *fuse(mgs_vdb_tsdf_info *info, mgs_error *err) {
-  mgs_vdb_tsdf_params p = {VOXEL, TRUNC, {0.013, -0.007, 0.002}};
+  mgs_vdb_tsdf_params p = {.voxel_size = VOXEL, .truncation = TRUNC, .origin = {0.013, -0.007, 0.002}};
   mgs_vdb_tsdf *t = NULL;
   mgs_vdb_grid *sdf = NULL;
   if (mgs_vdb_tsdf_create(&p, &t, err) != MGS_OK) return NULL;
@@ -102,9 +115,49 @@ static void test_torus(void) {
   mgs_vdb_grid_destroy(sdf);
 }
 
+/* Mean |plate(v)| over the level set's mesh vertices, in voxels; switched voxels out. */
+static double plate_error(double thin, size_t *switched) {
+  mgs_error err = {0};
+  mgs_vdb_tsdf_params p = {.voxel_size = VOXEL, .truncation = TRUNC, .truncation_thin = thin};
+  mgs_vdb_tsdf *t = NULL;
+  mgs_vdb_grid *sdf = NULL;
+  mgs_mesh *m = NULL;
+  double mean = -1;
+  CHECK_OK(mgs_vdb_tsdf_create(&p, &t, &err), &err);
+  CHECK_OK(mgs_vdb_tsdf_integrate(t, NV, g_cams, (const float *const *)g_depth, NULL, &err), &err);
+  CHECK_OK(mgs_vdb_tsdf_to_sdf(t, 3, 1, &sdf, &err), &err);
+  *switched = mgs_vdb_tsdf_thin_voxels(t);
+  if (sdf) {
+    CHECK_OK(mgs_topo_check_level_set(sdf, "plate", &err), &err);
+    CHECK_OK(mgs_vdb_extract_mesh(sdf, 0, 0, &m, &err), &err);
+  }
+  if (m) {
+    mean = 0;
+    for (size_t i = 0; i < m->nv; i++) {
+      double q[3] = {m->v[3 * i], m->v[3 * i + 1], m->v[3 * i + 2]};
+      mean += fabs(plate(q)) / m->nv;
+    }
+    mean /= VOXEL;
+  }
+  mgs_mesh_destroy(m);
+  mgs_vdb_grid_destroy(sdf);
+  mgs_vdb_tsdf_destroy(t);
+  return mean;
+}
+
+static void test_thin_plate(void) {
+  size_t sw_off = 0, sw_on = 0;
+  double off = plate_error(0, &sw_off), on = plate_error(VOXEL, &sw_on);
+  fprintf(stderr, "plate %.2g voxels thick, truncation %.2g voxels: mean |f| %.3g voxels without the thin-part "
+          "fusion, %.3g with it (%zu voxels switched)\n", PLATE_T / VOXEL, TRUNC / VOXEL, off, on, sw_on);
+  CHECK(sw_off == 0 && sw_on > 0);
+  CHECK(off > 1.0);            /* the slab: faces pushed out towards the truncation */
+  CHECK(on >= 0 && on < 0.5);  /* back on the faces */
+}
+
 static void test_bad_input(void) {
   mgs_error err = {0};
-  mgs_vdb_tsdf_params p = {VOXEL, TRUNC, {0, 0, 0}};
+  mgs_vdb_tsdf_params p = {.voxel_size = VOXEL, .truncation = TRUNC};
   mgs_vdb_tsdf *t = NULL;
   mgs_vdb_grid *sdf = NULL;
   mgs_vdb_tsdf_info info;
@@ -118,9 +171,16 @@ static void test_bad_input(void) {
   fprintf(stderr, "all background: %s\n", err.msg);
   mgs_vdb_tsdf_destroy(t);
   /* invalid parameters */
-  mgs_vdb_tsdf_params bad = {VOXEL, VOXEL / 2, {0, 0, 0}};
+  mgs_vdb_tsdf_params bad = {.voxel_size = VOXEL, .truncation = VOXEL / 2};
   CHECK(mgs_vdb_tsdf_create(&bad, &t, &err) == MGS_ERR_ARG);
   bad.voxel_size = NAN;
+  CHECK(mgs_vdb_tsdf_create(&bad, &t, &err) == MGS_ERR_ARG);
+  bad.voxel_size = VOXEL;
+  bad.truncation = TRUNC;
+  bad.truncation_thin = 2 * TRUNC; /* above the truncation */
+  CHECK(mgs_vdb_tsdf_create(&bad, &t, &err) == MGS_ERR_ARG);
+  bad.truncation_thin = VOXEL;
+  bad.thin_free_share = 1.5;
   CHECK(mgs_vdb_tsdf_create(&bad, &t, &err) == MGS_ERR_ARG);
   const float *np_[1] = {NULL};
   CHECK_OK(mgs_vdb_tsdf_create(&p, &t, &err), &err);
@@ -172,6 +232,9 @@ int main(int argc, char **argv) {
   RUN(test_torus);
   RUN(test_bad_input);
   if (argc > 1 && !strcmp(argv[1], "--open3d")) RUN(test_open3d);
+  g_shape = plate;
+  for (int k = 0; k < NV; k++) render_depth(&g_cams[k], g_depth[k]);
+  RUN(test_thin_plate);
   for (int k = 0; k < NV; k++) free(g_depth[k]);
   return mgs_test_finish();
 }

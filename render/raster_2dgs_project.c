@@ -117,6 +117,30 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
   r->radii[i] = (int)radius;
   if (op < MGS_ALPHA_MIN) return; /* alpha < 1/255 everywhere: nothing to bin */
+  /* Rows that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
+     and the box of the ellipse {u^2 + v^2 = rmax} (compute_aabb with that cutoff; an
+     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; rows outside
+     this range receive nothing from the surfel, so skipping them changes no value. */
+  {
+    float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
+    float rf = sqrtf(rmax / MGS_2DGS_FILTER_INV2);
+    float lo = cy - rf, hi = cy + rf;
+    const float t2[3] = {rmax, rmax, -1.0f};
+    float d2 = t2[0] * Tw[0] * Tw[0] + t2[1] * Tw[1] * Tw[1] + t2[2] * Tw[2] * Tw[2];
+    if (d2 < 0 && isfinite(d2)) {
+      float f2[3] = {t2[0] / d2, t2[1] / d2, t2[2] / d2};
+      float py2 = f2[0] * Tv[0] * Tw[0] + f2[1] * Tv[1] * Tw[1] + f2[2] * Tv[2] * Tw[2];
+      float h2 = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
+      float hy2 = sqrtf(h2 > 0 ? h2 : 0);
+      if (isfinite(py2) && isfinite(hy2)) {
+        lo = fminf(lo, py2 - hy2);
+        hi = fmaxf(hi, py2 + hy2);
+      } else { lo = -INFINITY; hi = INFINITY; }
+    } else { lo = -INFINITY; hi = INFINITY; }
+    float margin = 1.0f + 1e-3f * (hi - lo);
+    sf->ylo = lo - margin;
+    sf->yhi = hi + margin;
+  }
   uint16_t *rc = r->rect + 4 * i;
   rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
   r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));

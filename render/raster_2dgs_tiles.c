@@ -43,6 +43,14 @@ MGS_VINLINE void isect_eval(const mgs_surfel *sf, v16f X, float Y, isect_row *o)
   o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN)) & (rho == rho);
 }
 
+/* Rows [*lo, *hi] of the tile starting at pixel row y0 whose centres lie in the surfel's
+ * [ylo, yhi]. */
+static inline void row_span(const mgs_surfel *sf, int y0, int nrows, int *lo, int *hi) {
+  float a = sf->ylo - 0.5f - (float)y0, b = sf->yhi - 0.5f - (float)y0;
+  *lo = a <= 0 ? 0 : (a >= (float)nrows ? nrows : (int)ceilf(a));
+  *hi = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
+}
+
 MGS_VINLINE v16f depth_map(v16f z) {
   const float F = MGS_2DGS_FAR, N = MGS_2DGS_NEAR;
   return v16f_set1(F / (F - N)) * (v16f_set1(1.0f) - v16f_set1(N) / z);
@@ -75,7 +83,9 @@ static void render_tile(mgs_raster *r, size_t tile) {
   for (uint32_t j = start; j < end; j++) {
     const mgs_surfel *sf = &r->surf[r->isect_idx[j]];
     v16i jid = v16i_set1((int32_t)(j - start + 1));
-    for (int y = 0; y < nrows; y++) {
+    int ylo, yhi;
+    row_span(sf, y0, nrows, &ylo, &yhi);
+    for (int y = ylo; y <= yhi; y++) {
       if (rowdone[y]) continue;
       evals++;
       isect_row e;
@@ -222,7 +232,9 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
     for (int c = 0; c < SG_COUNT; c++) ac[c] = zero;
     const v16f cr = v16f_set1(sf->rgb[0]), cg = v16f_set1(sf->rgb[1]), cb = v16f_set1(sf->rgb[2]);
     const v16f n0 = v16f_set1(sf->n[0]), n1 = v16f_set1(sf->n[1]), n2 = v16f_set1(sf->n[2]);
-    for (int y = 0; y < nrows; y++) {
+    int ylo, yhi;
+    row_span(sf, y0, nrows, &ylo, &yhi);
+    for (int y = ylo; y <= yhi; y++) {
       if ((int32_t)(j - start) >= rowmax[y]) continue;
       evals++;
       float Y = (float)(y0 + y) + 0.5f;

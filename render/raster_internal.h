@@ -37,6 +37,7 @@ typedef struct mgs_surfel {
   float rgb[3];              /* SH colour, clamped at 0 */
   float n[3];                /* world normal (third axis of R) turned towards the camera */
   float nsign;               /* n = nsign * R e3 */
+  float ylo, yhi;            /* pixel-centre rows that can hold alpha >= 1/255 (conservative) */
 } mgs_surfel;
 
 /* Sum over one tile's pixels of the gradient w.r.t. one surfel's values (SG_STRIDE floats

@@ -391,6 +391,7 @@ static int run_model_pair(int size, size_t n, int iters) {
   char la0[128], la1[128];
   read_loadavg(la0, sizeof la0);
   size_t isect[2] = {0, 0};
+  double evf[2] = {0, 0}, evb[2] = {0, 0};
   const float lam = 0.2f;
   for (int it = -2; it < iters; it++)
     for (int m = 0; m < 2; m++) {
@@ -409,6 +410,7 @@ static int run_model_pair(int size, size_t n, int iters) {
       ph[m][0][it] = pr.project_cpu; ph[m][1][it] = pr.bin_cpu; ph[m][2][it] = pr.render_cpu;
       ph[m][3][it] = pr.tiles_cpu; ph[m][4][it] = pr.reduce_cpu;
       isect[m] = out.n_intersections;
+      mgs_raster_last_evals(r[m], &evf[m], &evb[m]);
       if (m == 1) ratio[it] = t[1][it] / t[0][it];
     }
   read_loadavg(la1, sizeof la1);
@@ -423,8 +425,10 @@ static int run_model_pair(int size, size_t n, int iters) {
   printf("training iteration (forward, L1+D-SSIM, fused backward+Adam), %dx%d, %zu primitives, SH 3, %d pairs "
          "alternated 3DGS/2DGS, %d threads\n", size, size, n, iters, mgs_parallel_max_threads());
   printf("load average before: %s | after: %s\n", la0, la1);
-  printf("  3DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections\n", med[0], medc[0], isect[0]);
-  printf("  2DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections\n", med[1], medc[1], isect[1]);
+  printf("  3DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections, %.3g / %.3g pixel evaluations\n", med[0],
+         medc[0], isect[0], evf[0], evb[0]);
+  printf("  2DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections, %.3g / %.3g pixel evaluations\n", med[1],
+         medc[1], isect[1], evf[1], evb[1]);
   static const char *const phn[5] = {"project+SH", "bin+sort", "forward tiles", "backward tiles", "per-primitive bwd+Adam"};
   printf("  phase CPU ms (median)      3DGS      2DGS\n");
   for (int k = 0; k < 5; k++) {

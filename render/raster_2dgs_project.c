@@ -117,29 +117,35 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
   r->radii[i] = (int)radius;
   if (op < MGS_ALPHA_MIN) return; /* alpha < 1/255 everywhere: nothing to bin */
-  /* Rows that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
+  /* The box that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
      and the box of the ellipse {u^2 + v^2 = rmax} (compute_aabb with that cutoff; an
-     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; rows outside
-     this range receive nothing from the surfel, so skipping them changes no value. */
+     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; pixels outside
+     the box receive nothing from the surfel, so skipping them changes no value. */
   {
     float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
     float rf = sqrtf(rmax / MGS_2DGS_FILTER_INV2);
-    float lo = cy - rf, hi = cy + rf;
+    float ylo = cy - rf, yhi = cy + rf, xlo = cx - rf, xhi = cx + rf;
     const float t2[3] = {rmax, rmax, -1.0f};
     float d2 = t2[0] * Tw[0] * Tw[0] + t2[1] * Tw[1] * Tw[1] + t2[2] * Tw[2] * Tw[2];
-    if (d2 < 0 && isfinite(d2)) {
+    int bounded = d2 < 0 && isfinite(d2);
+    if (bounded) {
       float f2[3] = {t2[0] / d2, t2[1] / d2, t2[2] / d2};
       float py2 = f2[0] * Tv[0] * Tw[0] + f2[1] * Tv[1] * Tw[1] + f2[2] * Tv[2] * Tw[2];
-      float h2 = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
-      float hy2 = sqrtf(h2 > 0 ? h2 : 0);
-      if (isfinite(py2) && isfinite(hy2)) {
-        lo = fminf(lo, py2 - hy2);
-        hi = fmaxf(hi, py2 + hy2);
-      } else { lo = -INFINITY; hi = INFINITY; }
-    } else { lo = -INFINITY; hi = INFINITY; }
-    float margin = 1.0f + 1e-3f * (hi - lo);
-    sf->ylo = lo - margin;
-    sf->yhi = hi + margin;
+      float ey = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
+      float px2 = f2[0] * Tu[0] * Tw[0] + f2[1] * Tu[1] * Tw[1] + f2[2] * Tu[2] * Tw[2];
+      float ex = px2 * px2 - (f2[0] * Tu[0] * Tu[0] + f2[1] * Tu[1] * Tu[1] + f2[2] * Tu[2] * Tu[2]);
+      ey = sqrtf(ey > 0 ? ey : 0);
+      ex = sqrtf(ex > 0 ? ex : 0);
+      bounded = isfinite(py2) && isfinite(ey) && isfinite(px2) && isfinite(ex);
+      if (bounded) {
+        ylo = fminf(ylo, py2 - ey); yhi = fmaxf(yhi, py2 + ey);
+        xlo = fminf(xlo, px2 - ex); xhi = fmaxf(xhi, px2 + ex);
+      }
+    }
+    if (!bounded) { ylo = xlo = -INFINITY; yhi = xhi = INFINITY; }
+    float my = 1.0f + 1e-3f * (yhi - ylo), mx = 1.0f + 1e-3f * (xhi - xlo);
+    sf->ylo = ylo - my; sf->yhi = yhi + my;
+    sf->xlo = xlo - mx; sf->xhi = xhi + mx;
   }
   uint16_t *rc = r->rect + 4 * i;
   rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;

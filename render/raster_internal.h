@@ -37,7 +37,8 @@ typedef struct mgs_surfel {
   float rgb[3];              /* SH colour, clamped at 0 */
   float n[3];                /* world normal (third axis of R) turned towards the camera */
   float nsign;               /* n = nsign * R e3 */
-  float ylo, yhi;            /* pixel-centre rows that can hold alpha >= 1/255 (conservative) */
+  float ylo, yhi;            /* pixel-centre rows and columns that can hold alpha >= 1/255 */
+  float xlo, xhi;            /* (a conservative box) */
 } mgs_surfel;
 
 /* Sum over one tile's pixels of the gradient w.r.t. one surfel's values (SG_STRIDE floats
@@ -111,6 +112,7 @@ struct mgs_raster {
   int32_t *s_medid;        /* 1-based tile-list position of the median contributor, 0: none */
   float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */
   int s_grad_live;         /* the map gradients were handed out since the forward */
+  int s_geo;               /* the geometry pass (normal, median, distortion) ran since the forward */
 
   /* statistics of the last calls (benchmark) */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
@@ -154,6 +156,7 @@ mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_erro
 mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m);
 void mgs_raster2d_render_tiles(mgs_raster *r);
+void mgs_raster2d_geometry(mgs_raster *r); /* the normal/median/distortion pass, once per forward */
 mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
                                        const float *dL_ddepth, mgs_error *err);
 /* per Gaussian [b, e): sum its slots, chain into grad (row 0 = Gaussian gbase) */

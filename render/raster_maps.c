@@ -127,7 +127,8 @@ mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, 
     for (size_t p = 0; p < npix; p++) r->map_expected[p] = r->out_alpha[p] > 0 ? r->out_depth[p] / r->out_alpha[p] : 0.0f;
     out->depth_expected = r->map_expected;
   }
-  if (r->surfel) { /* the 2DGS forward composited them already (raster_2dgs_tiles.c) */
+  if (r->surfel) { /* the 2DGS geometry pass (raster_2dgs_tiles.c) */
+    if (which & (MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION)) mgs_raster2d_geometry(r);
     if (which & MGS_MAP_DEPTH_MEDIAN) {
       for (size_t p = 0; p < npix; p++) r->map_median[p] = r->final_T[p] < 0.5f ? r->s_median[p] : 0.0f;
       out->depth_median = r->map_median;

@@ -28,6 +28,9 @@ typedef struct mgs_2dgs_term_options {
   double lambda_normal; /* 0.05 */
   int dist_from;        /* 3000 */
   int normal_from;      /* 7000 */
+  int alpha_weight;     /* 1: N_d scaled by the (detached) alpha, the authors'; 0: not scaled
+                           (the loss is then differentiable everywhere it is defined: the
+                           finite-difference test uses it) */
 } mgs_2dgs_term_options;
 
 void mgs_2dgs_term_options_default(mgs_2dgs_term_options *o);

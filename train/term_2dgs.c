@@ -10,6 +10,7 @@ void mgs_2dgs_term_options_default(mgs_2dgs_term_options *o) {
   o->lambda_normal = 0.05;
   o->dist_from = 3000;
   o->normal_from = 7000;
+  o->alpha_weight = 1;
 }
 
 typedef struct t2d {
@@ -82,7 +83,7 @@ static mgs_status t2d_image(void *self, mgs_term_step *s, mgs_error *err) {
         if (!ok) { err_sum += 1.0; continue; } /* Nd = 0: error 1, no gradient */
         float nd[3], cl;
         depth_normal(t->pts, W, p, nd, &cl);
-        float a = mp.alpha[p];
+        float a = t->o.alpha_weight ? mp.alpha[p] : 1.0f;
         err_sum += 1.0 - a * (N[0] * nd[0] + N[1] * nd[1] + N[2] * nd[2]);
         for (int k = 0; k < 3; k++) mg.normal[3 * p + k] += (float)(-lam * a * nd[k]);
         if (!(cl > 0)) continue;

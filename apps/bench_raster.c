@@ -343,13 +343,121 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   return 0;
 }
 
+/* ---- 2DGS vs 3DGS (--model 2dgs) ----
+ * The trainer's fused step (forward, L1 + D-SSIM, backward with Adam) of the benchmark
+ * scene as 3D Gaussians and as 2DGS surfels (the same centres, colours, opacities and the
+ * first two scales; the scene's rotations), alternated A B A B in one run so that both see
+ * the same machine load; medians over the iterations after two warm-up pairs, and the
+ * median of the per-pair ratios. */
+static int run_model_pair(int size, size_t n, int iters) {
+  mgs_error err;
+  mgs_error_clear(&err);
+  mgs_gaussians *g[2] = {bench_scene(n, 12345), bench_scene(n, 12345)}, *other = bench_scene(n, 777);
+  mgs_adam *adam[2] = {mgs_adam_create(n), mgs_adam_create(n)};
+  mgs_raster *r[2] = {mgs_raster_create(), mgs_raster_create()};
+  size_t np = (size_t)size * size * 3;
+  float *gt = malloc(np * sizeof(float)), *dl = malloc(np * sizeof(float)), *gm = malloc(n * sizeof(float));
+  double *t[2] = {calloc((size_t)iters, sizeof(double)), calloc((size_t)iters, sizeof(double))};
+  double *tc[2] = {calloc((size_t)iters, sizeof(double)), calloc((size_t)iters, sizeof(double))};
+  double *ratio = calloc((size_t)iters, sizeof(double));
+  double *ph[2][5]; /* CPU ms of the rasterizer's phases */
+  for (int m = 0; m < 2; m++)
+    for (int k = 0; k < 5; k++) ph[m][k] = calloc((size_t)iters, sizeof(double));
+  if (!g[0] || !g[1] || !other || !adam[0] || !adam[1] || !r[0] || !r[1] || !gt || !dl || !gm || !t[0] || !t[1] ||
+      !tc[0] || !tc[1] || !ratio) {
+    fprintf(stderr, "morsegs bench raster: out of memory for %zu Gaussians\n", n);
+    return 1;
+  }
+  g[1]->kind = MGS_MODEL_2DGS;
+  for (size_t i = 0; i < n; i++) g[1]->log_scale[3 * i + 2] = MGS_SURFEL_LOG_SCALE2;
+  for (int m = 0; m < 2; m++) {
+    mgs_adam *a = adam[m];
+    a->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; a->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; a->lr[MGS_PARAM_ROT] = 1e-3f;
+    a->lr[MGS_PARAM_OPACITY] = 0.05f; a->lr[MGS_PARAM_SH_DC] = 2.5e-3f; a->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
+    a->sh_rest_active = 15;
+  }
+  mgs_camera cam;
+  mgs_camera_init_fovx(&cam, size, size, 60.0 * 3.14159265358979 / 180.0);
+  double eye[3] = {2.4, -2.8, 1.6}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+  mgs_camera_look_at(&cam, eye, target, up);
+  mgs_raster_settings s;
+  mgs_raster_settings_default(&s);
+  s.sh_degree = 3;
+  s.background[0] = s.background[1] = s.background[2] = 1.0f;
+  mgs_raster_output out;
+  if (mgs_raster_forward(r[0], other, &cam, &s, &out, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+  memcpy(gt, out.color, np * sizeof(float));
+  mgs_gaussians_destroy(other);
+  char la0[128], la1[128];
+  read_loadavg(la0, sizeof la0);
+  size_t isect[2] = {0, 0};
+  double evf[2] = {0, 0}, evb[2] = {0, 0};
+  const float lam = 0.2f;
+  for (int it = -2; it < iters; it++)
+    for (int m = 0; m < 2; m++) {
+      double c0 = cpu_now(), w0 = mgs_now();
+      if (mgs_raster_forward(r[m], g[m], &cam, &s, &out, &err) != MGS_OK) return mgs_cli_fail("bench raster", &err);
+      memset(dl, 0, np * sizeof(float));
+      (void)mgs_loss_l1(out.color, gt, size, size, 3, 1.0f - lam, dl);
+      (void)mgs_ssim(out.color, gt, size, size, 3, -lam, dl);
+      if (mgs_adam_step_backward(adam[m], g[m], r[m], dl, NULL, NULL, gm, (1u << MGS_PARAM_COUNT) - 1, &err) != MGS_OK)
+        return mgs_cli_fail("bench raster", &err);
+      if (it < 0) continue;
+      t[m][it] = (mgs_now() - w0) * 1e3;
+      tc[m][it] = (cpu_now() - c0) * 1e3;
+      mgs_raster_profile pr;
+      mgs_raster_last_profile(r[m], &pr);
+      ph[m][0][it] = pr.project_cpu; ph[m][1][it] = pr.bin_cpu; ph[m][2][it] = pr.render_cpu;
+      ph[m][3][it] = pr.tiles_cpu; ph[m][4][it] = pr.reduce_cpu;
+      isect[m] = out.n_intersections;
+      mgs_raster_last_evals(r[m], &evf[m], &evb[m]);
+      if (m == 1) ratio[it] = t[1][it] / t[0][it];
+    }
+  read_loadavg(la1, sizeof la1);
+  double med[2], medc[2];
+  for (int m = 0; m < 2; m++) {
+    qsort(t[m], (size_t)iters, sizeof(double), cmp_double);
+    qsort(tc[m], (size_t)iters, sizeof(double), cmp_double);
+    med[m] = t[m][iters / 2];
+    medc[m] = tc[m][iters / 2];
+  }
+  qsort(ratio, (size_t)iters, sizeof(double), cmp_double);
+  printf("training iteration (forward, L1+D-SSIM, fused backward+Adam), %dx%d, %zu primitives, SH 3, %d pairs "
+         "alternated 3DGS/2DGS, %d threads\n", size, size, n, iters, mgs_parallel_max_threads());
+  printf("load average before: %s | after: %s\n", la0, la1);
+  printf("  3DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections, %.3g / %.3g pixel evaluations\n", med[0],
+         medc[0], isect[0], evf[0], evb[0]);
+  printf("  2DGS: %8.2f ms wall, %8.2f ms CPU (median), %zu tile intersections, %.3g / %.3g pixel evaluations\n", med[1],
+         medc[1], isect[1], evf[1], evb[1]);
+  static const char *const phn[5] = {"project+SH", "bin+sort", "forward tiles", "backward tiles", "per-primitive bwd+Adam"};
+  printf("  phase CPU ms (median)      3DGS      2DGS\n");
+  for (int k = 0; k < 5; k++) {
+    double v[2];
+    for (int m = 0; m < 2; m++) {
+      qsort(ph[m][k], (size_t)iters, sizeof(double), cmp_double);
+      v[m] = ph[m][k][iters / 2];
+      free(ph[m][k]);
+    }
+    printf("  %-22s %9.2f %9.2f\n", phn[k], v[0], v[1]);
+  }
+  printf("2DGS / 3DGS: %.2fx (median of per-pair wall ratios; CPU medians %.2fx)\n", ratio[iters / 2], medc[1] / medc[0]);
+  for (int m = 0; m < 2; m++) {
+    free(t[m]); free(tc[m]);
+    mgs_raster_destroy(r[m]);
+    mgs_adam_destroy(adam[m]);
+    mgs_gaussians_destroy(g[m]);
+  }
+  free(ratio); free(gt); free(dl); free(gm);
+  return 0;
+}
+
 int mgs_bench_raster(int argc, char **argv) {
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"threads", required_argument, 0, 't'},
                                            {"size", required_argument, 0, 's'}, {"gaussians", required_argument, 0, 'n'},
                                            {"iteration", no_argument, 0, 'I'}, {"iters", required_argument, 0, 'i'},
-                                           {"unfused", no_argument, 0, 'U'},
+                                           {"unfused", no_argument, 0, 'U'}, {"model", required_argument, 0, 'M'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0, iteration = 0, unfused = 0;
+  int quick = 0, iteration = 0, unfused = 0, model2 = 0;
   long iters = 50;
   long threads = 0, one_size = 0, one_n = 0;
   optind = 1;
@@ -361,6 +469,13 @@ int mgs_bench_raster(int argc, char **argv) {
     case 'q': quick = 1; break;
     case 'I': iteration = 1; break;
     case 'U': unfused = 1; break;
+    case 'M':
+      if (strcmp(optarg, "2dgs") && strcmp(optarg, "3dgs")) {
+        fprintf(stderr, "morsegs bench raster: bad --model '%s' (3dgs or 2dgs)\n", optarg);
+        return 2;
+      }
+      model2 = !strcmp(optarg, "2dgs");
+      break;
     case 'i':
       iters = strtol(optarg, &end, 10);
       if (*end || iters < 1 || iters > 100000) { fprintf(stderr, "morsegs bench raster: bad --iters '%s'\n", optarg); return 2; }
@@ -388,13 +503,16 @@ int mgs_bench_raster(int argc, char **argv) {
              "               split by phase, wall and CPU ms; default 200x200, 100k Gaussians\n"
              "  --iters N    iterations timed by --iteration (50)\n"
              "  --unfused    --iteration with the backward and Adam as separate passes (as the trainer on\n"
-             "               densification steps)\n");
+             "               densification steps)\n"
+             "  --model 2dgs a training iteration of 2DGS surfels against 3DGS on the same scene, alternated\n"
+             "               in one run (default 200x200, 100k primitives; --iters pairs, 50)\n");
       return 0;
     default: fprintf(stderr, "morsegs bench raster: bad option %s (see --help)\n", argv[optind - 1]); return 2;
     }
   }
   if (optind < argc) { fprintf(stderr, "morsegs bench raster: unexpected argument '%s'\n", argv[optind]); return 2; }
   if (threads > 0) mgs_parallel_set_threads((int)threads);
+  if (model2) return run_model_pair(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters);
   if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused);
   int nthr = mgs_parallel_max_threads();
   const char *isa = "";

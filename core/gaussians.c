@@ -102,6 +102,7 @@ mgs_gaussians *mgs_gaussians_select(const mgs_gaussians *src, const size_t *idx,
   }
   g->n = count;
   for (int k = 0; k < 3; k++) g->origin[k] = src->origin[k];
+  g->kind = src->kind;
   return g;
 }
 
@@ -113,6 +114,7 @@ mgs_gaussians *mgs_gaussians_clone(const mgs_gaussians *src) {
     memcpy(*group_slot(g, (mgs_param_group)k), *group_slot(s, (mgs_param_group)k), src->n * (size_t)k_dims[k] * sizeof(float));
   g->n = src->n;
   for (int k = 0; k < 3; k++) g->origin[k] = src->origin[k];
+  g->kind = src->kind;
   return g;
 }
 
@@ -194,3 +196,5 @@ int mgs_gaussians_bounds(const mgs_gaussians *g, double lo[3], double hi[3]) {
     }
   return 1;
 }
+
+const char *mgs_model_kind_name(mgs_model_kind k) { return k == MGS_MODEL_2DGS ? "2dgs" : "3dgs"; }

@@ -40,6 +40,16 @@ typedef enum mgs_param_group {
   MGS_PARAM_COUNT
 } mgs_param_group;
 
+/* What the rows are: 3D Gaussians, or 2DGS surfels (hbb1/2d-gaussian-splatting: a disc
+ * spanned by the first two local axes with standard deviations exp(log_scale[0..1]); the
+ * normal is the third axis of R; log_scale[2] is not a parameter of the model: renderers
+ * ignore it, the rasterizer's gradient for it is 0 and the .ply has no scale_2). */
+typedef enum mgs_model_kind { MGS_MODEL_3DGS = 0, MGS_MODEL_2DGS = 1 } mgs_model_kind;
+const char *mgs_model_kind_name(mgs_model_kind k); /* "3dgs", "2dgs" */
+/* What a surfel's unused log_scale[2] holds when read or initialized (a flat disc to any
+ * code that treats it as a 3D Gaussian; code that needs a thickness sets its own). */
+#define MGS_SURFEL_LOG_SCALE2 (-13.815511f) /* log(1e-6) */
+
 typedef struct mgs_gaussians {
   size_t n;        /* Gaussians in use */
   size_t capacity; /* rows allocated in every group */
@@ -47,6 +57,8 @@ typedef struct mgs_gaussians {
   float *mean, *log_scale, *rot, *opacity, *sh_dc, *sh_rest;
   double origin[3]; /* world position of mean (0,0,0); (0,0,0) unless the scene is far
                        from the world origin. Kept by select/clone; written by the .ply */
+  mgs_model_kind kind; /* MGS_MODEL_3DGS (0, what create gives) unless set; kept by
+                          select/clone */
 } mgs_gaussians;
 
 /* Floats per Gaussian in each group: 3, 3, 4, 1, 3, 45. */

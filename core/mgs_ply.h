@@ -18,6 +18,9 @@
 extern "C" {
 #endif
 
+/* Either model kind: a file with scale_0 and scale_1 but no scale_2 is a 2DGS model
+ * (kind MGS_MODEL_2DGS, log_scale[2] = MGS_SURFEL_LOG_SCALE2), and a 2DGS model is
+ * written with those two columns, as hbb1/2d-gaussian-splatting does. */
 /* Means as stored (world), origin (0,0,0). */
 mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err);
 /* Means relative to `origin` (subtracted in double before they become float; sets
@@ -28,6 +31,11 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
  * atomic (temp + rename). A model with a non-zero origin is written in world coordinates
  * with double x y z (origin + mean in double); otherwise the reference's all-float layout. */
 mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs_error *err);
+
+/* mgs_ply_read_gaussians_local, failing (MGS_ERR_FORMAT, naming the file and both kinds)
+ * when the file holds the other kind of model. */
+mgs_status mgs_ply_read_gaussians_kind(const char *path, mgs_model_kind kind, const double *origin, mgs_gaussians **out,
+                                       mgs_error *err);
 
 typedef struct mgs_point_cloud {
   size_t n;

@@ -40,6 +40,7 @@ static mgs_status read_row(void *ctx, size_t row, const double *v, mgs_error *er
   mgs_gaussians *g = r->g;
   float f[G_FIXED];
   for (int k = 0; k < G_FIXED; k++) {
+    if (r->col_fixed[k] < 0) { f[k] = MGS_SURFEL_LOG_SCALE2; continue; } /* a surfel's scale_2 */
     f[k] = (float)v[r->col_fixed[k]];
     if (!isfinite(f[k]))
       return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite (%g)", r->path, row,
@@ -99,8 +100,12 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
   memset(&r, 0, sizeof r);
   r.path = path;
   r.el = el;
+  /* two scale columns: a 2DGS model, as hbb1/2d-gaussian-splatting writes it */
+  const int surfel = ply_find_property(el, "scale_2") < 0 && ply_find_property(el, "scale_0") >= 0 &&
+                     ply_find_property(el, "scale_1") >= 0;
   for (int k = 0; k < G_FIXED; k++) {
     int c = ply_find_property(el, fixed_names[k]);
+    if (c < 0 && surfel && k == G_S2) { r.col_fixed[k] = -1; continue; }
     if (c < 0) { ply_close(&pf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing vertex property '%s' (not a 3DGS .ply?)", path, fixed_names[k]); }
     if (el->props[c].is_list || !float_type(el->props[c].type)) {
       st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: vertex property '%s' has type %s%s; expected float", path, fixed_names[k],
@@ -161,6 +166,7 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
   }
   /* the means into the local frame, in double before they become float */
   mgs_gaussians *g = r.g;
+  g->kind = surfel ? MGS_MODEL_2DGS : MGS_MODEL_3DGS;
   if (origin) for (int k = 0; k < 3; k++) g->origin[k] = origin[k];
   else choose_origin(r.xyz64, g->n, g->origin);
   for (size_t i = 0; i < g->n; i++)
@@ -220,10 +226,13 @@ mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs
   fputs("property float nx\nproperty float ny\nproperty float nz\n"
         "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n", fp);
   for (int j = 0; j < 3 * R; j++) fprintf(fp, "property float f_rest_%d\n", j);
-  fputs("property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
-        "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n", fp);
+  /* a 2DGS model: two scale columns, as its authors write it */
+  const int ns = g->kind == MGS_MODEL_2DGS ? 2 : 3;
+  fputs("property float opacity\nproperty float scale_0\nproperty float scale_1\n", fp);
+  if (ns == 3) fputs("property float scale_2\n", fp);
+  fputs("property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n", fp);
 
-  const int nf = 3 + 3 + 3 + 3 * R + 1 + 3 + 4;
+  const int nf = 3 + 3 + 3 + 3 * R + 1 + ns + 4;
   const size_t row_bytes = (size_t)nf * 4 + (world64 ? 12 : 0);
   enum { ROWS_PER_CHUNK = 4096 };
   unsigned char *buf = malloc(row_bytes * ROWS_PER_CHUNK);
@@ -245,7 +254,7 @@ mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs
         for (int k = 0; k < R; k++, p += 4) ply_put_f32le(p, g->sh_rest[i * MGS_SH_REST_MAX + (size_t)(k * 3 + c)]);
       ply_put_f32le(p, g->opacity[i]);
       p += 4;
-      for (int k = 0; k < 3; k++, p += 4) ply_put_f32le(p, g->log_scale[i * 3 + (size_t)k]);
+      for (int k = 0; k < ns; k++, p += 4) ply_put_f32le(p, g->log_scale[i * 3 + (size_t)k]);
       for (int k = 0; k < 4; k++, p += 4) ply_put_f32le(p, g->rot[i * 4 + (size_t)k]);
     }
     size_t bytes = (size_t)(p - buf);
@@ -257,4 +266,16 @@ mgs_status mgs_ply_write_gaussians(const char *path, const mgs_gaussians *g, mgs
   }
   free(buf);
   return mgs_atomic_commit(af, err);
+}
+
+mgs_status mgs_ply_read_gaussians_kind(const char *path, mgs_model_kind kind, const double *origin, mgs_gaussians **out,
+                                       mgs_error *err) {
+  mgs_status st = mgs_ply_read_gaussians_local(path, origin, out, err);
+  if (st != MGS_OK || (*out)->kind == kind) return st;
+  mgs_model_kind got = (*out)->kind;
+  mgs_gaussians_destroy(*out);
+  *out = NULL;
+  return mgs_error_set(err, MGS_ERR_FORMAT, "%s: a %s model (%d scale columns), expected a %s model (%d)", path,
+                       mgs_model_kind_name(got), got == MGS_MODEL_2DGS ? 2 : 3, mgs_model_kind_name(kind),
+                       kind == MGS_MODEL_2DGS ? 2 : 3);
 }

@@ -21,6 +21,22 @@
  *  - Gaussians with a non-finite parameter, projection or colour are culled (radius 0).
  * Sorting is by float depth, ties by index, as the reference's stable 64-bit key sort.
  *
+ * The model's kind chooses the rasterizer (one interface for every caller):
+ * MGS_MODEL_2DGS models (surfels, core/mgs_gaussians.h) go through the 2DGS rasterizer of
+ * hbb1/diff-surfel-rasterization, render/raster_2dgs_*.c: per pixel the ray meets the
+ * surfel's plane through the homogeneous splat-to-pixel map T, rho = min(u^2 + v^2,
+ * 2 |pixel - centre|^2) (screen-space fallback, a sqrt(2)/2 px filter around the centre of
+ * the 3-sigma box), alpha = min(0.99, o e^(-rho/2)), ray-splat depths < 0.2 skipped, the
+ * same 1/255 skip, T < 1e-4 stop, 16x16 tiles, binning and depth sort (by the centre's
+ * depth); every pixel of the tiles of the 3-sigma box is evaluated, as the authors'. It
+ * also composites the normal (world, turned to the camera), the median depth and the
+ * depth distortion sum_i sum_j<i w_i w_j (m_i - m_j)^2, m = f/(f-n) (1 - n/z), n 0.2,
+ * f 100, in the same pass; their gradients enter through mgs_raster_map_grads. The
+ * depth output is sum_i w_i z_i with z_i the ray-splat depth; the 2D-mean gradient norm is
+ * the authors' (dL/dT's centre column times the depth, in NDC). Deliberate differences
+ * from the authors': exact derivatives everywhere (the depth's dependence on the
+ * intersection also in the fallback case, none through a clamped alpha).
+ *
  * A context keeps the buffers of the last forward pass (reused between calls, so steady-
  * state training allocates nothing); backward uses them and must follow the forward it
  * belongs to with the same model and camera unchanged. Not thread-safe per context; the
@@ -97,6 +113,17 @@ mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const 
  * its alpha decisions, so a forward that is not followed by this call costs nothing more.
  * The forward's model must be unchanged. Valid until the next forward on this context. */
 mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, mgs_error *err);
+
+/* 2DGS only: gradient arrays of the loss w.r.t. the last forward's geometry maps
+ * (height*width each; normal 3 per pixel, world space), zeroed at the first call after a
+ * forward; loss terms add into them, and the backward of that forward reads them.
+ * depth_median: dL/d(the median depth map of mgs_raster_maps, 0 where alpha < 0.5: no
+ * gradient there); normal: dL/d(sum_i w_i n_i); distortion: dL/d(distortion). A 3DGS
+ * forward gives MGS_ERR_ARG. */
+typedef struct mgs_raster_map_grad {
+  float *depth_median, *normal, *distortion;
+} mgs_raster_map_grad;
+mgs_status mgs_raster_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_error *err);
 
 /* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
  * Gradients are ADDED into `grad` (a model with the same n; its groups are used as

@@ -23,7 +23,8 @@ enum {
   MGS_MAP_DEPTH_EXPECTED = 1u << 0,
   MGS_MAP_DEPTH_MEDIAN = 1u << 1,
   MGS_MAP_NORMAL = 1u << 2,
-  MGS_MAP_ALL = 7u
+  MGS_MAP_ALL = 7u,
+  MGS_MAP_DISTORTION = 1u << 3 /* 2DGS only: sum_i sum_j<i w_i w_j (m_i - m_j)^2 (raster.h) */
 };
 
 typedef struct mgs_render_maps {
@@ -32,6 +33,7 @@ typedef struct mgs_render_maps {
   const float *depth_expected;
   const float *depth_median;
   const float *normal;
+  const float *distortion;
 } mgs_render_maps;
 
 /* Which depth a consumer uses (depth fusion: per model, measured). */

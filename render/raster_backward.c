@@ -150,6 +150,7 @@ void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const floa
  * Each Gaussian is touched by one call only, so no atomics. */
 static void reduce_span(const bwd_ctx *bc, size_t b, size_t e, mgs_gaussians *grad, size_t gbase) {
   mgs_raster *r = bc->r;
+  if (r->surfel) { mgs_raster2d_reduce_span(r, b, e, grad, gbase, bc->grad_mean2d); return; }
   uint32_t idx[16];
   float gsum[GS_N][16];
   int nl = 0;
@@ -234,17 +235,23 @@ static mgs_status backward_check(const mgs_raster *r, const float *dL_dcolor, mg
 
 /* The per-tile part, then the per-Gaussian part (fn over work items [0, units)), both
  * timed. */
-static void backward_run(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha, const float *dL_ddepth,
-                         float *grad_mean2d, size_t units, size_t grain, mgs_range_fn fn, void *ctx) {
+static mgs_status backward_run(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha, const float *dL_ddepth,
+                               float *grad_mean2d, size_t units, size_t grain, mgs_range_fn fn, void *ctx,
+                               mgs_error *err) {
   if (grad_mean2d) memset(grad_mean2d, 0, r->n * sizeof(float));
   double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
-  mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
+  if (!r->surfel) mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
+  else {
+    mgs_status st = mgs_raster2d_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth, err);
+    if (st != MGS_OK) return st;
+  }
   double t1 = mgs_now(), c1 = mgs_raster_cpu_now();
   mgs_parallel_for(0, units, grain, fn, ctx);
   r->prof.tiles_ms = (t1 - t0) * 1e3;
   r->prof.reduce_ms = (mgs_now() - t1) * 1e3;
   r->prof.tiles_cpu = (c1 - c0) * 1e3;
   r->prof.reduce_cpu = (mgs_raster_cpu_now() - c1) * 1e3;
+  return MGS_OK;
 }
 
 mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
@@ -257,8 +264,7 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: gradient model has %zu Gaussians (SH %d), "
                          "the forward had %zu (SH %d)", grad->n, grad->sh_degree, r->n, r->s.sh_degree);
   bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, grad, grad_mean2d};
-  backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, r->n, 1024, reduce_range, &bc);
-  return MGS_OK;
+  return backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, r->n, 1024, reduce_range, &bc, err);
 }
 
 static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float *dL_dcolor,
@@ -287,7 +293,8 @@ static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: the model is not the forward's (%zu Gaussians, "
                          "the forward had %zu)", model->n, r->n);
   sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx, visible_only};
-  backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range, &sc);
+  st = backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range,
+                    &sc, err);
   r->have_forward = 0; /* the sink may have changed the model: another backward needs a new forward */
-  return MGS_OK;
+  return st;
 }

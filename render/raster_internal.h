@@ -29,6 +29,26 @@ typedef struct mgs_proj_aux {
   uint8_t clamped[3];  /* colour channel clamped at 0 */
 } mgs_proj_aux;
 
+/* What the tile kernels need of one projected 2DGS surfel (raster_2dgs_*.c). */
+typedef struct mgs_surfel {
+  float Tu[3], Tv[3], Tw[3]; /* rows of the splat-to-pixel map: (x w, y w, w) = T (u, v, 1) */
+  float cx, cy;              /* centre of the 3-sigma box: the screen-space filter's centre */
+  float opacity;             /* sigmoid(logit) */
+  float rgb[3];              /* SH colour, clamped at 0 */
+  float n[3];                /* world normal (third axis of R) turned towards the camera */
+  float nsign;               /* n = nsign * R e3 */
+  float ylo, yhi;            /* pixel-centre rows and columns that can hold alpha >= 1/255 */
+  float xlo, xhi;            /* (a conservative box) */
+} mgs_surfel;
+
+/* Sum over one tile's pixels of the gradient w.r.t. one surfel's values (SG_STRIDE floats
+ * per intersection). */
+enum { SG_T = 0 /* 9: Tu, Tv, Tw */, SG_CX = 9, SG_CY, SG_OP, SG_R, SG_G, SG_B, SG_N, SG_COUNT = SG_N + 3 };
+#define SG_STRIDE 32
+#define MGS_2DGS_NEAR 0.2f        /* ray-splat depths below are skipped (the authors' near_n) */
+#define MGS_2DGS_FAR 100.0f       /* far_n of the distortion's depth mapping */
+#define MGS_2DGS_FILTER_INV2 2.0f /* rho2d = 2 |pixel - centre|^2: a sqrt(2)/2 px filter */
+
 /* Sum over one tile's pixels of the gradient w.r.t. one splat's values. */
 enum { GS_R, GS_G, GS_B, GS_Z, GS_OP, GS_U, GS_V, GS_A, GS_B2, GS_C, GS_N };
 /* Floats per intersection gradient slot: one aligned cache line (the slots are written in
@@ -83,6 +103,17 @@ struct mgs_raster {
   float *map_gnormal;      /* per Gaussian: unit normal facing the camera (3) */
   float *map_expected, *map_median, *map_normal;
 
+  /* 2DGS (raster_2dgs_*.c): set when the forward's model is MGS_MODEL_2DGS */
+  int surfel;
+  size_t cap_surf, cap_sgrad, cap_spix;
+  mgs_surfel *surf;
+  float *sgrad;            /* SG_STRIDE floats per intersection (backward) */
+  float *s_normal, *s_median, *s_dist, *s_m1, *s_m2, *s_m0; /* per pixel (normal: 3) */
+  int32_t *s_medid;        /* 1-based tile-list position of the median contributor, 0: none */
+  float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */
+  int s_grad_live;         /* the map gradients were handed out since the forward */
+  int s_geo;               /* the geometry pass (normal, median, distortion) ran since the forward */
+
   /* statistics of the last calls (benchmark) */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
   mgs_raster_profile prof;
@@ -119,6 +150,18 @@ double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
 mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
+
+/* raster_2dgs_project.c / raster_2dgs_tiles.c: the surfel model's projection (idx NULL:
+ * all), compositing, backward and maps */
+mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
+void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m);
+void mgs_raster2d_render_tiles(mgs_raster *r);
+void mgs_raster2d_geometry(mgs_raster *r); /* the normal/median/distortion pass, once per forward */
+mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
+                                       const float *dL_ddepth, mgs_error *err);
+/* per Gaussian [b, e): sum its slots, chain into grad (row 0 = Gaussian gbase) */
+void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d);
+void mgs_raster2d_free(mgs_raster *r);
 
 /* The forward's per-pixel evaluation, shared so forward and backward agree bit for bit. */
 #define MGS_ALPHA_MIN (1.0f / 255.0f)

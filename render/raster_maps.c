@@ -112,8 +112,10 @@ static void maps_range(void *vctx, size_t b, size_t e) {
 mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, mgs_error *err) {
   if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: NULL argument");
   if (!r->have_forward) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: no forward pass on this context");
-  if (which & ~(unsigned)MGS_MAP_ALL)
+  if (which & ~(unsigned)(MGS_MAP_ALL | MGS_MAP_DISTORTION))
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: unknown map flags 0x%x", which);
+  if ((which & MGS_MAP_DISTORTION) && !r->surfel)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: the distortion map needs a 2DGS model");
   size_t npix = (size_t)r->width * r->height;
   mgs_status st = mgs_raster_reserve_maps(r, which & MGS_MAP_NORMAL ? r->n : 0, npix, err);
   if (st != MGS_OK) return st;
@@ -124,6 +126,16 @@ mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, 
   if (which & MGS_MAP_DEPTH_EXPECTED) {
     for (size_t p = 0; p < npix; p++) r->map_expected[p] = r->out_alpha[p] > 0 ? r->out_depth[p] / r->out_alpha[p] : 0.0f;
     out->depth_expected = r->map_expected;
+  }
+  if (r->surfel) { /* the 2DGS geometry pass (raster_2dgs_tiles.c) */
+    if (which & (MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION)) mgs_raster2d_geometry(r);
+    if (which & MGS_MAP_DEPTH_MEDIAN) {
+      for (size_t p = 0; p < npix; p++) r->map_median[p] = r->final_T[p] < 0.5f ? r->s_median[p] : 0.0f;
+      out->depth_median = r->map_median;
+    }
+    if (which & MGS_MAP_NORMAL) out->normal = r->s_normal;
+    if (which & MGS_MAP_DISTORTION) out->distortion = r->s_dist;
+    return MGS_OK;
   }
   maps_ctx c = {r, which};
   if (which & MGS_MAP_NORMAL) mgs_parallel_for(0, r->n, 1024, gauss_normals, &c);

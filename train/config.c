@@ -486,6 +486,7 @@ void mgs_config_train_options(const mgs_train_config *c, mgs_train_options *o) {
   TAKE("grad-threshold", o->adc.grad_threshold, (float)c->grad_threshold);
   TAKE("percent-dense", o->adc.percent_dense, (float)c->percent_dense);
   TAKE("min-opacity", o->adc.min_opacity, (float)c->min_opacity);
+  if (c->model == MGS_MODEL_2DGS && !set_here(c, "min-opacity")) o->adc.min_opacity = 0.05f; /* the authors' opacity_cull */
   TAKE("max-screen-size", o->adc.max_screen_px, (float)c->max_screen_size);
   o->adc.white_background = c->background == MGS_BG_WHITE;
   o->visibility = c->visibility == MGS_AUTO_OFF_ON_AUTO ? -1 : c->visibility == MGS_AUTO_OFF_ON_ON;
@@ -560,4 +561,13 @@ int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o) 
   o->gamma = c->normal_loss;
   if (c->iters < 2 * o->from_iter) o->from_iter = c->iters / 2 > 0 ? c->iters / 2 : 1; /* short runs: the second half */
   return c->normal_loss > 0;
+}
+
+int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term_options *o) {
+  mgs_2dgs_term_options_default(o);
+  o->lambda_dist = c->lambda_dist >= 0 ? c->lambda_dist : (format == MGS_DATASET_NERF_SYNTHETIC ? 1000.0 : 0.0);
+  o->lambda_normal = c->lambda_normal;
+  if (c->iters < o->dist_from) o->dist_from = c->iters / 2 > 0 ? c->iters / 2 : 1;       /* short runs: */
+  if (c->iters < o->normal_from) o->normal_from = (3 * c->iters) / 4 > 0 ? (3 * c->iters) / 4 : 1; /* the later part */
+  return c->model == MGS_MODEL_2DGS;
 }

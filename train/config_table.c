@@ -95,6 +95,15 @@ static const mgs_option TABLE[] = {
   {"freeze", "freeze", MGS_OPT_BOOL, F(freeze), "0", 0, 1, NULL, "1", MGS_GROUP_BASELINE, REC,
    "diagnostic: never update the parameters (test calibration)", "a diagnostic of the serial trainer"},
 
+  /* ---- 2DGS (hbb1/2d-gaussian-splatting; docs/notes/2dgs.md) ---- */
+  {"model", "model", MGS_OPT_ENUM, F(model), "3dgs", 0, 0, "3dgs|2dgs", NULL, MGS_GROUP_BASELINE, REC,
+   "splat model: 3dgs, or 2dgs (surfels with the authors' init, rasterizer, densification and losses)", NOT_DIST},
+  {"lambda-dist", "lambda_dist", MGS_OPT_DOUBLE, F(lambda_dist), "-1", -1, 1e9, NULL, NULL, MGS_GROUP_BASELINE, REC,
+   "2DGS depth distortion weight from iteration 3000 (-1 = auto: 1000, the authors' object (DTU) setting, for "
+   "NeRF-synthetic; 0, their default, for COLMAP and nerfstudio)", NOT_DIST},
+  {"lambda-normal", "lambda_normal", MGS_OPT_DOUBLE, F(lambda_normal), "0.05", 0, 1e9, NULL, NULL, MGS_GROUP_BASELINE,
+   REC, "2DGS normal consistency weight from iteration 7000 (median depth's normals)", NOT_DIST},
+
   /* ---- large scenes (docs/notes/scale.md) ---- */
   {"visibility", "visibility", MGS_OPT_ENUM, F(visibility), "auto", 0, 0, "auto|on|off", NULL, MGS_GROUP_SCALE,
    REC | MPI, "project only the spatial tiles a view can see (auto: on when views see under half the model)", NULL},

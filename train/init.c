@@ -208,3 +208,13 @@ mgs_status mgs_init_random_for_dataset(const mgs_dataset *ds, size_t count, int 
   mgs_rng_init(&rng, seed, 0x696e6974u);
   return mgs_init_random(count, lo, hi, sh_degree, &rng, out, err);
 }
+
+void mgs_init_to_surfels(mgs_gaussians *g, uint64_t seed) {
+  mgs_rng rng;
+  mgs_rng_init(&rng, seed, 2027); /* a stream of its own: the 3DGS init's draws stay as they are */
+  g->kind = MGS_MODEL_2DGS;
+  for (size_t i = 0; i < g->n; i++) {
+    for (int k = 0; k < 4; k++) g->rot[4 * i + k] = (float)mgs_rng_uniform(&rng);
+    g->log_scale[3 * i + 2] = MGS_SURFEL_LOG_SCALE2;
+  }
+}

@@ -26,6 +26,7 @@
 #include "train/mgs_lpvi.h"
 #include "train/mgs_persloss.h"
 #include "train/mgs_term_normal.h"
+#include "train/mgs_term_2dgs.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -83,6 +84,9 @@ typedef struct mgs_train_config {
   double floater_volume, floater_mass;
   int max_spawn, morse_incremental;
   double normal_loss;
+  /* 2DGS */
+  int model;
+  double lambda_dist, lambda_normal;
   /* Topology-GS */
   int lpvi_faithful;
   double lpvi_tau, lpvi_max_edge, pers_loss;
@@ -165,6 +169,9 @@ int mgs_config_morse_options(const mgs_train_config *c, mgs_morse_options *o);
 void mgs_config_lpvi_options(const mgs_train_config *c, mgs_lpvi_options *o);
 /* PersLoss; returns 1 if it is on. */
 int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options *o);
+/* The 2DGS losses (train/mgs_term_2dgs.h) of a --model 2dgs run on dataset format
+ * `format` (lambda-dist auto resolved); returns 1 for a 2DGS run. */
+int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term_options *o);
 /* The normal loss; returns 1 if it is on (its start moved to half a run shorter than twice it). */
 int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o);
 /* Names of enum values (for messages and records). */

@@ -39,6 +39,8 @@ typedef struct mgs_term_step {
   double extent;                /* scene radius (the reference's cameras_extent) */
   mgs_rng *rng;
   float *dl_dcolor;             /* image_grad adds here */
+  struct mgs_raster *raster;    /* the rasterizer context of this iteration's forward (its
+                                   maps and, for 2DGS, map gradients: render/mgs_raster.h) */
   mgs_gaussians *grad;          /* model_grad adds here (the model's n and SH degree) */
   double value;                 /* out: the term's weighted loss value this iteration */
 } mgs_term_step;

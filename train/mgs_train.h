@@ -97,6 +97,11 @@ size_t mgs_model_compact(mgs_gaussians *g, mgs_adam *a, const uint8_t *keep);
  * the colour, higher SH zero, identity rotation. */
 mgs_status mgs_init_from_points(const float *xyz, const float *rgb, size_t n, int sh_degree,
                                 mgs_gaussians **out, mgs_error *err);
+/* Makes an initial model 2DGS surfels as the authors' create_from_pcd does (the same
+ * centres, colours, opacity 0.1 and sqrt(mean squared 3-NN distance) scales on the two
+ * disc axes; rotations uniform random in [0,1)^4, unnormalized, from `seed`'s own stream;
+ * log_scale[2] = MGS_SURFEL_LOG_SCALE2). */
+void mgs_init_to_surfels(mgs_gaussians *g, uint64_t seed);
 /* Mean squared distance of each point to its 3 nearest other points (uniform grid). */
 mgs_status mgs_knn3_mean_sq(const float *xyz, size_t n, float *out, mgs_error *err);
 /* Random init of the reference for NeRF-synthetic: `count` points uniform in the cube

@@ -100,6 +100,7 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   mgs_gaussians *g0 = NULL;
   mgs_status st = initial_model(c, ds, for_resume, &g0, out->init_used, err);
   if (st) return st;
+  if (c->model == MGS_MODEL_2DGS) mgs_init_to_surfels(g0, c->seed); /* a checkpoint keeps the kind set here */
   mgs_morse_options mo;
   int use_morse = mgs_config_morse_options(c, &mo);
   mgs_strategy *strat = NULL;
@@ -129,6 +130,12 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   if (mgs_config_persloss_options(c, &po)) {
     mgs_term *pt = NULL;
     if ((st = mgs_term_persloss_create(&po, &pt, err)) || (st = mgs_trainer_add_term(out->trainer, pt, err))) goto fail;
+  }
+  mgs_2dgs_term_options to;
+  if (mgs_config_2dgs_options(c, (int)ds->format, &to)) {
+    mgs_term *tt = NULL;
+    if ((st = mgs_term_2dgs_create(&to, &tt, err))) goto fail;
+    if (tt && (st = mgs_trainer_add_term(out->trainer, tt, err))) goto fail;
   }
   mgs_normal_options no;
   if (mgs_config_normal_options(c, &no)) {

@@ -5,6 +5,10 @@
  * scale / (0.8 N), prune transparent ones (and, after the first opacity reset, ones too
  * big on screen or in the world); reset opacities every `opacity_reset_every`.
  *
+ * 2DGS models (kind MGS_MODEL_2DGS) as the authors': split samples lie in the surfel's
+ * plane (0 sigma along the normal); the opacity cull of 0.05 is the option's value
+ * (train/config.c).
+ *
  * Deliberate difference: the reference zeroes max_radii2D in densification_postfix
  * *before* its screen-size test, so that test never fires there; here the test uses the
  * largest radius seen during the interval (the evident intent). Set max_screen_px = 0 to
@@ -102,10 +106,13 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
   size_t w = first;
   for (size_t i = 0; i < n0; i++)
     if (sel[i] == 1) copy_row(g, w++, i);
+  /* 2DGS surfels: samples at 0 sigma along the normal, the unused third scale kept */
+  const int surfel = g->kind == MGS_MODEL_2DGS;
   for (size_t i = 0; i < n0; i++) {
     if (sel[i] != 2) continue;
     float s[3], R[9];
     for (int k = 0; k < 3; k++) s[k] = expf(g->log_scale[3 * i + k]);
+    if (surfel) s[2] = 0;
     mgs_quat_to_mat3f(g->rot + 4 * i, R);
     for (int c = 0; c < N; c++) {
       copy_row(g, w, i);
@@ -113,7 +120,7 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
       for (int k = 0; k < 3; k++) z[k] = (float)mgs_rng_normal(rng) * s[k];
       for (int r = 0; r < 3; r++)
         g->mean[3 * w + r] = g->mean[3 * i + r] + R[3 * r] * z[0] + R[3 * r + 1] * z[1] + R[3 * r + 2] * z[2];
-      for (int k = 0; k < 3; k++) g->log_scale[3 * w + k] = logf(s[k] / (0.8f * (float)N));
+      for (int k = 0; k < 3 - surfel; k++) g->log_scale[3 * w + k] = logf(s[k] / (0.8f * (float)N));
       w++;
     }
   }

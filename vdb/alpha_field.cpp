@@ -401,8 +401,8 @@ void get_raw(const void *ctx, size_t i, double mean[3], double cov[9], double *a
   *alpha = a[2][i];
 }
 
-void get_model(const void *ctx, size_t i, double mean[3], double cov[9], double *alpha) {
-  const mgs_gaussians *g = static_cast<const mgs_gaussians *>(ctx);
+// Covariance R diag(s²) Rᵀ of row i with log-scales ls, and its opacity.
+void model_row(const mgs_gaussians *g, size_t i, const float ls[3], double mean[3], double cov[9], double *alpha) {
   for (int k = 0; k < 3; k++) mean[k] = g->mean[3 * i + k];
   double q[4] = {g->rot[4 * i], g->rot[4 * i + 1], g->rot[4 * i + 2], g->rot[4 * i + 3]};
   double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
@@ -412,7 +412,7 @@ void get_model(const void *ctx, size_t i, double mean[3], double cov[9], double 
   mgs_quat_to_mat3d(q, R);
   double s2[3];
   for (int k = 0; k < 3; k++) {
-    double s = std::exp(std::min((double)g->log_scale[3 * i + k], 300.0));
+    double s = std::exp(std::min((double)ls[k], 300.0));
     s2[k] = s * s;
   }
   for (int a = 0; a < 3; a++)
@@ -421,7 +421,29 @@ void get_model(const void *ctx, size_t i, double mean[3], double cov[9], double 
   *alpha = 1.0 / (1.0 + std::exp(-(double)g->opacity[i]));
 }
 
+void get_model(const void *ctx, size_t i, double mean[3], double cov[9], double *alpha) {
+  const mgs_gaussians *g = static_cast<const mgs_gaussians *>(ctx);
+  model_row(g, i, g->log_scale + 3 * i, mean, cov, alpha);
+}
+
+// A 2DGS surfel has no thickness: its third standard deviation is taken as half a voxel
+// (a disc one voxel thick, seen by every voxel centre it crosses even without the
+// low-pass filter), whatever its unused log_scale[2] holds.
+struct SurfelCtx {
+  const mgs_gaussians *g;
+  double s3;
+};
+void get_surfel(const void *ctx, size_t i, double mean[3], double cov[9], double *alpha) {
+  const SurfelCtx *c = static_cast<const SurfelCtx *>(ctx);
+  const float ls[3] = {c->g->log_scale[3 * i], c->g->log_scale[3 * i + 1], (float)std::log(c->s3)};
+  model_row(c->g, i, ls, mean, cov, alpha);
+}
+
 }  // namespace
+
+extern "C" double mgs_vdb_surfel_thickness(const mgs_gaussians *g, const mgs_vdb_alpha_params *p) {
+  return 0.5 * mgs_vdb_voxel_size_for(g->n, g->mean, p);
+}
 
 extern "C" void mgs_vdb_alpha_params_default(mgs_vdb_alpha_params *p) {
   std::memset(p, 0, sizeof *p);
@@ -503,7 +525,8 @@ extern "C" mgs_status mgs_vdb_alpha_field(const mgs_gaussians *g, const mgs_vdb_
   *out = nullptr;
   mgs_status st = mgs_vdb_check_gaussians(g, "alpha field", err);
   if (st != MGS_OK) return st;
-  Source s{g->n, get_model, g, g->mean};
+  SurfelCtx sc{g, mgs_vdb_surfel_thickness(g, p)};
+  Source s = g->kind == MGS_MODEL_2DGS && sc.s3 > 0 ? Source{g->n, get_surfel, &sc, g->mean} : Source{g->n, get_model, g, g->mean};
   try {
     return build(s, p, out, info, err);
   } catch (const std::exception &e) {
@@ -521,7 +544,8 @@ extern "C" mgs_status mgs_vdb_alpha_field_cached(const mgs_gaussians *g, const m
   if (!cache) return mgs_error_set(err, MGS_ERR_ARG, "alpha field: no cache");
   mgs_status st = mgs_vdb_check_gaussians(g, "alpha field", err);
   if (st != MGS_OK) return st;
-  Source s{g->n, get_model, g, g->mean};
+  SurfelCtx sc{g, mgs_vdb_surfel_thickness(g, p)};
+  Source s = g->kind == MGS_MODEL_2DGS && sc.s3 > 0 ? Source{g->n, get_surfel, &sc, g->mean} : Source{g->n, get_model, g, g->mean};
   try {
     return build(s, p, out, info, err, cache);
   } catch (const std::exception &e) {

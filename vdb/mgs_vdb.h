@@ -124,6 +124,11 @@ typedef struct mgs_vdb_build_info {
  * and an empty model (MGS_ERR_FORMAT). */
 mgs_status mgs_vdb_check_gaussians(const mgs_gaussians *g, const char *source, mgs_error *err);
 
+/* A 2DGS model's surfels (core/mgs_gaussians.h) have no thickness: the α-field builders
+ * give them a third standard deviation of half the voxel size (this value), so that a
+ * surfel is a disc one voxel thick. */
+double mgs_vdb_surfel_thickness(const mgs_gaussians *g, const mgs_vdb_alpha_params *p);
+
 /* The α-field as a FOG-class grid named "alpha" (values not clamped: A may exceed 1).
  * Active voxels = the union of the kσ ellipsoids; inactive = 0. */
 mgs_status mgs_vdb_alpha_field(const mgs_gaussians *g, const mgs_vdb_alpha_params *p,

@@ -1,0 +1,299 @@
+/* Per-surfel preprocessing of the 2DGS forward (the splat-to-pixel map T, culling, the
+ * 3-sigma box, SH colour, tile rectangle) and its backward (T, the box centre, the normal
+ * and the colour back to mean, scales, quaternion, opacity and SH), as the authors'
+ * compute_transmat / compute_aabb / compute_transmat_aabb. T's centre column (the camera-
+ * space centre) is computed in double (scenes far from the origin), the rest in float. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/mgs_math.h"
+#include "core/mgs_parallel.h"
+#include "render/raster_internal.h"
+
+#define CUTOFF 3.0f
+#define FILTER_SIZE 0.707106f
+
+/* What the projection needs of the camera. */
+typedef struct cam_par {
+  float M[9];      /* rows fx W0 + cx W2, fy W1 + cy W2, W2: camera rotation then pixels */
+  double campos[3];
+} cam_par;
+
+static void cam_par_init(const mgs_raster *r, cam_par *cp) {
+  const mgs_camera *c = &r->cam;
+  for (int k = 0; k < 3; k++) {
+    cp->M[k] = (float)(c->fx * c->w2c[k] + c->cx * c->w2c[8 + k]);
+    cp->M[3 + k] = (float)(c->fy * c->w2c[4 + k] + c->cy * c->w2c[8 + k]);
+    cp->M[6 + k] = (float)c->w2c[8 + k];
+  }
+  mgs_camera_center(c, cp->campos);
+}
+
+/* Rotation, scales and T of surfel i (the backward recomputes them through this same code).
+ * td: camera-space centre (double). */
+static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const double td[3], float R[9], float s[2],
+                     float Tu[3], float Tv[3], float Tw[3]) {
+  const mgs_gaussians *g = r->g;
+  mgs_quat_to_mat3f(g->rot + 4 * i, R);
+  s[0] = r->s.scale_modifier * expf(g->log_scale[3 * i]);
+  s[1] = r->s.scale_modifier * expf(g->log_scale[3 * i + 1]);
+  const mgs_camera *c = &r->cam;
+  float *rows[3] = {Tu, Tv, Tw};
+  for (int a = 0; a < 3; a++) {
+    const float *m = cp->M + 3 * a;
+    rows[a][0] = s[0] * (m[0] * R[0] + m[1] * R[3] + m[2] * R[6]);
+    rows[a][1] = s[1] * (m[0] * R[1] + m[1] * R[4] + m[2] * R[7]);
+  }
+  Tu[2] = (float)(c->fx * td[0] + c->cx * td[2]);
+  Tv[2] = (float)(c->fy * td[1] + c->cy * td[2]);
+  Tw[2] = (float)td[2];
+}
+
+static void cull(mgs_raster *r, size_t i) {
+  r->radii[i] = 0;
+  r->count[i] = 0;
+}
+
+static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
+
+static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
+  const mgs_gaussians *g = r->g;
+  const double *V = r->cam.w2c;
+  double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
+  for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
+  cull(r, i);
+  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return;
+  const float *q = g->rot + 4 * i;
+  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return;
+  mgs_surfel *sf = &r->surf[i];
+  float R[9], s[2];
+  surfel_T(r, cp, i, td, R, s, sf->Tu, sf->Tv, sf->Tw);
+  /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
+  double cosv = 0;
+  for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
+  if (cosv == 0 || !isfinite(cosv)) return;
+  sf->nsign = cosv > 0 ? 1.0f : -1.0f;
+  for (int k = 0; k < 3; k++) sf->n[k] = sf->nsign * R[3 * k + 2];
+  /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
+  const float *Tu = sf->Tu, *Tv = sf->Tv, *Tw = sf->Tw;
+  const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
+  float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
+  if (d == 0 || !isfinite(d)) return;
+  float f[3] = {t[0] / d, t[1] / d, t[2] / d};
+  float cx = f[0] * Tu[0] * Tw[0] + f[1] * Tu[1] * Tw[1] + f[2] * Tu[2] * Tw[2];
+  float cy = f[0] * Tv[0] * Tw[0] + f[1] * Tv[1] * Tw[1] + f[2] * Tv[2] * Tw[2];
+  float hx0 = cx * cx - (f[0] * Tu[0] * Tu[0] + f[1] * Tu[1] * Tu[1] + f[2] * Tu[2] * Tu[2]);
+  float hy0 = cy * cy - (f[0] * Tv[0] * Tv[0] + f[1] * Tv[1] * Tv[1] + f[2] * Tv[2] * Tv[2]);
+  float hx = sqrtf(hx0 > 1e-4f ? hx0 : 1e-4f), hy = sqrtf(hy0 > 1e-4f ? hy0 : 1e-4f);
+  float ext = hx > hy ? hx : hy;
+  float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
+  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return;
+  sf->cx = cx;
+  sf->cy = cy;
+  /* the reference's getRect, in its pixel coordinates (centres at integers) */
+  double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
+  int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
+  int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_x);
+  int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_y);
+  if ((x1 - x0) * (y1 - y0) == 0) return;
+  /* colour */
+  mgs_proj_aux *ax = &r->aux[i];
+  double dd[3] = {p[0] - cp->campos[0], p[1] - cp->campos[1], p[2] - cp->campos[2]};
+  double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+  for (int k = 0; k < 3; k++) ax->dir[k] = dist > 0 ? (float)(dd[k] / dist) : 0.0f;
+  ax->dist = (float)dist;
+  float rgb[3];
+  mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, rgb);
+  for (int k = 0; k < 3; k++) {
+    if (!isfinite(rgb[k])) return;
+    ax->clamped[k] = rgb[k] < 0;
+    sf->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
+  }
+  for (int k = 0; k < 3; k++) ax->t[k] = (float)td[k];
+  float op = mgs_sigmoidf(g->opacity[i]);
+  sf->opacity = op;
+  mgs_splat *sp = &r->splat[i];
+  memset(sp, 0, sizeof *sp);
+  sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
+  r->radii[i] = (int)radius;
+  if (op < MGS_ALPHA_MIN) return; /* alpha < 1/255 everywhere: nothing to bin */
+  /* The box that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
+     and the box of the ellipse {u^2 + v^2 = rmax} (compute_aabb with that cutoff; an
+     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; pixels outside
+     the box receive nothing from the surfel, so skipping them changes no value. */
+  {
+    float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
+    float rf = sqrtf(rmax / MGS_2DGS_FILTER_INV2);
+    float ylo = cy - rf, yhi = cy + rf, xlo = cx - rf, xhi = cx + rf;
+    const float t2[3] = {rmax, rmax, -1.0f};
+    float d2 = t2[0] * Tw[0] * Tw[0] + t2[1] * Tw[1] * Tw[1] + t2[2] * Tw[2] * Tw[2];
+    int bounded = d2 < 0 && isfinite(d2);
+    if (bounded) {
+      float f2[3] = {t2[0] / d2, t2[1] / d2, t2[2] / d2};
+      float py2 = f2[0] * Tv[0] * Tw[0] + f2[1] * Tv[1] * Tw[1] + f2[2] * Tv[2] * Tw[2];
+      float ey = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
+      float px2 = f2[0] * Tu[0] * Tw[0] + f2[1] * Tu[1] * Tw[1] + f2[2] * Tu[2] * Tw[2];
+      float ex = px2 * px2 - (f2[0] * Tu[0] * Tu[0] + f2[1] * Tu[1] * Tu[1] + f2[2] * Tu[2] * Tu[2]);
+      ey = sqrtf(ey > 0 ? ey : 0);
+      ex = sqrtf(ex > 0 ? ex : 0);
+      bounded = isfinite(py2) && isfinite(ey) && isfinite(px2) && isfinite(ex);
+      if (bounded) {
+        ylo = fminf(ylo, py2 - ey); yhi = fmaxf(yhi, py2 + ey);
+        xlo = fminf(xlo, px2 - ex); xhi = fmaxf(xhi, px2 + ex);
+      }
+    }
+    if (!bounded) { ylo = xlo = -INFINITY; yhi = xhi = INFINITY; }
+    float my = 1.0f + 1e-3f * (yhi - ylo), mx = 1.0f + 1e-3f * (xhi - xlo);
+    sf->ylo = ylo - my; sf->yhi = yhi + my;
+    sf->xlo = xlo - mx; sf->xhi = xhi + mx;
+  }
+  uint16_t *rc = r->rect + 4 * i;
+  rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
+  r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+}
+
+typedef struct proj_ctx {
+  mgs_raster *r;
+  cam_par cp;
+  const uint32_t *idx;
+} proj_ctx;
+
+static void project_range(void *vctx, size_t b, size_t e) {
+  const proj_ctx *pc = vctx;
+  for (size_t k = b; k < e; k++) project_one(pc->r, &pc->cp, pc->idx ? pc->idx[k] : k);
+}
+
+void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
+  proj_ctx pc = {r, {{0}, {0}}, idx};
+  cam_par_init(r, &pc.cp);
+  if (idx) {
+    memset(r->radii, 0, r->n * sizeof *r->radii);
+    memset(r->count, 0, r->n * sizeof *r->count);
+  }
+  mgs_parallel_for(0, idx ? m : r->n, 256, project_range, &pc);
+}
+
+/* Backward of one binned surfel: gs = its summed slots. */
+static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float *gs, mgs_gaussians *grad, size_t gbase,
+                         float *grad_mean2d) {
+  const mgs_gaussians *g = r->g;
+  const mgs_surfel *sf = &r->surf[i];
+  const mgs_proj_aux *ax = &r->aux[i];
+  const double *V = r->cam.w2c;
+  double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
+  for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
+  float R[9], s[2], Tu[3], Tv[3], Tw[3];
+  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
+  float dTu[3] = {gs[0], gs[1], gs[2]}, dTv[3] = {gs[3], gs[4], gs[5]}, dTw[3] = {gs[6], gs[7], gs[8]};
+  /* the authors' densification signal: dL/dT's centre column times the depth, in NDC */
+  if (grad_mean2d) {
+    float gx = gs[2] * Tw[2] * 0.5f * (float)r->width, gy = gs[5] * Tw[2] * 0.5f * (float)r->height;
+    grad_mean2d[i] = sqrtf(gx * gx + gy * gy);
+  }
+  /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
+  float gcx = gs[SG_CX], gcy = gs[SG_CY];
+  if (gcx != 0 || gcy != 0) {
+    const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
+    float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
+    float gd = -(gcx * sf->cx + gcy * sf->cy) / d;
+    for (int k = 0; k < 3; k++) {
+      float f = t[k] / d;
+      dTu[k] += gcx * f * Tw[k];
+      dTv[k] += gcy * f * Tw[k];
+      dTw[k] += gcx * f * Tu[k] + gcy * f * Tv[k] + gd * 2.0f * t[k] * Tw[k];
+    }
+  }
+  /* T columns: M (s0 R e0), M (s1 R e1), the pixel-homogeneous centre */
+  float col[3][3];
+  for (int c = 0; c < 3; c++) { col[c][0] = dTu[c]; col[c][1] = dTv[c]; col[c][2] = dTw[c]; }
+  float gv[3][3]; /* M^T col */
+  for (int c = 0; c < 3; c++)
+    for (int k = 0; k < 3; k++) gv[c][k] = cp->M[k] * col[c][0] + cp->M[3 + k] * col[c][1] + cp->M[6 + k] * col[c][2];
+  /* the centre column in camera space is fx t0 + cx t2, fy t1 + cy t2, t2 with t = W p + t:
+     d/dp = W^T (fx g0, fy g1, cx g0 + cy g1 + g2) = M^T g */
+  size_t gi = i - gbase;
+  float dmean[3] = {gv[2][0], gv[2][1], gv[2][2]};
+  float dR[9];
+  for (int a = 0; a < 3; a++) {
+    dR[3 * a] = s[0] * gv[0][a];
+    dR[3 * a + 1] = s[1] * gv[1][a];
+    dR[3 * a + 2] = sf->nsign * gs[SG_N + a];
+  }
+  float ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
+  float ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
+  grad->log_scale[3 * gi] += ds0 * s[0];
+  grad->log_scale[3 * gi + 1] += ds1 * s[1];
+  /* quaternion (normalized inside R) */
+  const float *q = g->rot + 4 * i;
+  float qn2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (qn2 > 0) {
+    float qn = sqrtf(qn2), w = q[0] / qn, x = q[1] / qn, y = q[2] / qn, z = q[3] / qn;
+    float gq[4];
+    gq[0] = 2.0f * (-z * dR[1] + y * dR[2] + z * dR[3] - x * dR[5] - y * dR[6] + x * dR[7]);
+    gq[1] = 2.0f * (y * dR[1] + z * dR[2] + y * dR[3] - 2.0f * x * dR[4] - w * dR[5] + z * dR[6] + w * dR[7] - 2.0f * x * dR[8]);
+    gq[2] = 2.0f * (-2.0f * y * dR[0] + x * dR[1] + w * dR[2] + x * dR[3] + z * dR[5] - w * dR[6] + z * dR[7] - 2.0f * y * dR[8]);
+    gq[3] = 2.0f * (-2.0f * z * dR[0] - w * dR[1] + x * dR[2] + w * dR[3] - 2.0f * z * dR[4] + y * dR[5] + x * dR[6] + y * dR[7]);
+    float qd = w * gq[0] + x * gq[1] + y * gq[2] + z * gq[3];
+    float qv[4] = {w, x, y, z};
+    for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += (gq[k] - qv[k] * qd) / qn;
+  }
+  grad->opacity[gi] += gs[SG_OP] * sf->opacity * (1.0f - sf->opacity);
+  float drgb[3], ddir[3];
+  for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gs[SG_R + k];
+  mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, drgb,
+                  grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, ddir);
+  if (ax->dist > 0) {
+    float dd = ax->dir[0] * ddir[0] + ax->dir[1] * ddir[1] + ax->dir[2] * ddir[2];
+    for (int k = 0; k < 3; k++) dmean[k] += (ddir[k] - ax->dir[k] * dd) / ax->dist;
+  }
+  for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dmean[k];
+}
+
+void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d) {
+  cam_par cp;
+  cam_par_init(r, &cp);
+  for (size_t i = b; i < e; i++) {
+    uint32_t cnt = r->count[i];
+    if (!cnt) continue;
+    float gs[SG_COUNT] = {0};
+    const float *q = r->sgrad + (size_t)r->gauss_off[i] * SG_STRIDE;
+    for (uint32_t k = 0; k < cnt; k++, q += SG_STRIDE)
+      for (int c = 0; c < SG_COUNT; c++) gs[c] += q[c];
+    int any = 0;
+    for (int c = 0; c < SG_COUNT; c++) any |= gs[c] != 0;
+    if (!any) continue;
+    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d);
+  }
+}
+
+static int grow(void **p, size_t n, size_t sz) {
+  if (n == 0) n = 1;
+  void *q = realloc(*p, n * sz);
+  if (!q) return 0;
+  *p = q;
+  return 1;
+}
+
+mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err) {
+  if (n > r->cap_surf) {
+    size_t c = n + n / 4;
+    if (!grow((void **)&r->surf, c, sizeof(mgs_surfel)))
+      return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_project.c: out of memory for %zu surfels", n);
+    r->cap_surf = c;
+  }
+  if (pix > r->cap_spix) {
+    if (!grow((void **)&r->s_normal, 3 * pix, sizeof(float)) || !grow((void **)&r->s_median, pix, sizeof(float)) ||
+        !grow((void **)&r->s_dist, pix, sizeof(float)) || !grow((void **)&r->s_m1, pix, sizeof(float)) ||
+        !grow((void **)&r->s_m2, pix, sizeof(float)) || !grow((void **)&r->s_m0, pix, sizeof(float)) || !grow((void **)&r->s_medid, pix, sizeof(int32_t)) ||
+        !grow((void **)&r->s_gmed, pix, sizeof(float)) || !grow((void **)&r->s_gnormal, 3 * pix, sizeof(float)) ||
+        !grow((void **)&r->s_gdist, pix, sizeof(float)))
+      return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_project.c: out of memory for %zu pixels", pix);
+    r->cap_spix = pix;
+  }
+  return MGS_OK;
+}
+
+void mgs_raster2d_free(mgs_raster *r) {
+  free(r->surf); free(r->sgrad); free(r->s_normal); free(r->s_median); free(r->s_dist); free(r->s_m1);
+  free(r->s_m2); free(r->s_m0); free(r->s_medid); free(r->s_gmed); free(r->s_gnormal); free(r->s_gdist);
+}

@@ -1,0 +1,379 @@
+/* The 2DGS tile kernels: per tile, front-to-back compositing of the ray-splat
+ * intersections (colour, alpha, sum w z; the normal, median depth and distortion in a
+ * second pass of the same compositing, run only when maps or their gradients are asked for),
+ * and the backward, back to front from each pixel's last contributor, each intersection's
+ * summed gradients written to its own slot (no atomics). A tile row of 16 pixels is one
+ * vector: along a row, k = x Tw - Tu varies and l = y Tw - Tv is constant. */
+#include <math.h>
+#include <string.h>
+#include "core/mgs_log.h"
+#include "core/mgs_parallel.h"
+#include "render/raster_kernel.h"
+
+/* The per-pixel evaluation both kernels share bit for bit. Along a tile row k = x Tw - Tu
+ * varies with the column only (isect_cols, once per surfel and tile), l = y Tw - Tv with
+ * the row only (scalars). */
+typedef struct isect_cols {
+  v16f kx, ky, kz, ddx;
+} isect_cols;
+
+MGS_VINLINE void isect_cols_init(const mgs_surfel *sf, v16f X, isect_cols *c) {
+  c->kx = X * sf->Tw[0] - sf->Tu[0];
+  c->ky = X * sf->Tw[1] - sf->Tu[1];
+  c->kz = X * sf->Tw[2] - sf->Tu[2];
+  c->ddx = v16f_set1(sf->cx) - X;
+}
+
+typedef struct isect_row {
+  v16f px, py, pz, sx, sy, rho3, rho2, z, G, raw, alpha;
+  float lx, ly, lz, ddy;
+  v16i m; /* valid: p.z != 0, z >= near, alpha >= 1/255 */
+} isect_row;
+
+MGS_VINLINE void isect_eval(const mgs_surfel *sf, const isect_cols *c, float Y, isect_row *o) {
+  const v16f zero = v16f_set1(0.0f);
+  o->lx = Y * sf->Tw[0] - sf->Tv[0];
+  o->ly = Y * sf->Tw[1] - sf->Tv[1];
+  o->lz = Y * sf->Tw[2] - sf->Tv[2];
+  o->px = c->ky * o->lz - c->kz * o->ly;
+  o->py = c->kz * o->lx - c->kx * o->lz;
+  o->pz = c->kx * o->ly - c->ky * o->lx;
+  v16i pok = o->pz != zero;
+  v16f ipz = v16f_rcp(v16f_select(pok, o->pz, v16f_set1(1.0f)));
+  o->sx = o->px * ipz;
+  o->sy = o->py * ipz;
+  o->rho3 = o->sx * o->sx + o->sy * o->sy;
+  o->ddy = sf->cy - Y;
+  o->rho2 = MGS_2DGS_FILTER_INV2 * (c->ddx * c->ddx + o->ddy * o->ddy);
+  v16f rho = v16f_min(o->rho3, o->rho2);
+  o->z = o->sx * sf->Tw[0] + o->sy * sf->Tw[1] + sf->Tw[2];
+  o->G = v16f_exp_neg(v16f_set1(-0.5f) * rho);
+  o->raw = v16f_set1(sf->opacity) * o->G;
+  o->alpha = v16f_min(v16f_set1(MGS_ALPHA_MAX), o->raw);
+  o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN)) & (rho == rho);
+}
+
+/* Does the surfel's alpha >= 1/255 box miss the columns [x0, x0 + ncols)? */
+static inline int misses_cols(const mgs_surfel *sf, int x0, int ncols) {
+  return sf->xhi < (float)x0 + 0.5f || sf->xlo > (float)(x0 + ncols) - 0.5f;
+}
+
+/* Rows [*lo, *hi] of the tile starting at pixel row y0 whose centres lie in the surfel's
+ * [ylo, yhi]. */
+static inline void row_span(const mgs_surfel *sf, int y0, int nrows, int *lo, int *hi) {
+  float a = sf->ylo - 0.5f - (float)y0, b = sf->yhi - 0.5f - (float)y0;
+  *lo = a <= 0 ? 0 : (a >= (float)nrows ? nrows : (int)ceilf(a));
+  *hi = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
+}
+
+MGS_VINLINE v16f depth_map(v16f z) {
+  const float F = MGS_2DGS_FAR, N = MGS_2DGS_NEAR;
+  return v16f_set1(F / (F - N)) * (v16f_set1(1.0f) - v16f_set1(N) / z);
+}
+
+/* geo: also the normal, median depth and distortion (the maps pass); without, what the
+ * 3DGS forward composites (colour, alpha, sum w z), so that a training forward that needs
+ * no geometry costs no more. Both take the same alpha decisions. */
+static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r, size_t tile, const int geo) {
+  const int W = r->width, H = r->height;
+  int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
+  int x0 = tx * MGS_TILE_SIZE, y0 = ty * MGS_TILE_SIZE;
+  int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
+  int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
+  /* distortion sums of m - m0, m0 the pixel's first contributor's m: the same value
+     (shift-invariant), without the cancellation of m ~ 0.9 squared (float) */
+  enum { CR, CG, CB, DZ, N0, N1, N2, M1, M2, DI, MED, M0, NACC };
+  v16f T[MGS_TILE_SIZE], A[NACC][MGS_TILE_SIZE];
+  v16i NC[MGS_TILE_SIZE], MID[MGS_TILE_SIZE], DONE[MGS_TILE_SIZE];
+  v16f X;
+  v16i outside;
+  for (int i = 0; i < 16; i++) { X[i] = (float)(x0 + i) + 0.5f; outside[i] = i < ncols ? 0 : -1; }
+  int rowdone[MGS_TILE_SIZE];
+  for (int y = 0; y < MGS_TILE_SIZE; y++) {
+    T[y] = v16f_set1(1.0f);
+    for (int a = 0; a < NACC; a++) A[a][y] = v16f_set1(0.0f);
+    NC[y] = MID[y] = v16i_set1(0);
+    DONE[y] = outside;
+    rowdone[y] = y >= nrows;
+  }
+  const v16f one = v16f_set1(1.0f), half = v16f_set1(0.5f), tmin = v16f_set1(MGS_T_MIN);
+  uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1], evals = 0;
+  for (uint32_t j = start; j < end; j++) {
+    const mgs_surfel *sf = &r->surf[r->isect_idx[j]];
+    v16i jid = v16i_set1((int32_t)(j - start + 1));
+    int ylo, yhi;
+    row_span(sf, y0, nrows, &ylo, &yhi);
+    if (ylo > yhi || misses_cols(sf, x0, ncols)) continue;
+    isect_cols ic;
+    isect_cols_init(sf, X, &ic);
+    for (int y = ylo; y <= yhi; y++) {
+      if (rowdone[y]) continue;
+      evals++;
+      isect_row e;
+      isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
+      v16i m = e.m & ~DONE[y];
+      v16f testT = T[y] * (one - e.alpha);
+      v16i nd = m & (testT < tmin);
+      DONE[y] |= nd;
+      if (v16i_any(nd)) rowdone[y] = !v16i_any(~DONE[y]);
+      m &= ~nd;
+      if (!v16i_any(m)) continue;
+      v16f w = v16f_and(m, e.alpha * T[y]);
+      if (geo) {
+        v16f mz = depth_map(e.z);
+        A[M0][y] = v16f_select(m & (T[y] == one), mz, A[M0][y]);
+        v16f md = v16f_select(m, mz - A[M0][y], v16f_set1(0.0f));
+        A[DI][y] += w * (md * md * (one - T[y]) + A[M2][y] - 2.0f * md * A[M1][y]);
+        A[M1][y] += w * md;
+        A[M2][y] += w * md * md;
+        v16i med = m & (T[y] > half);
+        A[MED][y] = v16f_select(med, e.z, A[MED][y]);
+        MID[y] = (med & jid) | (~med & MID[y]);
+        A[N0][y] += w * sf->n[0]; A[N1][y] += w * sf->n[1]; A[N2][y] += w * sf->n[2];
+      }
+      A[DZ][y] += w * e.z;
+      A[CR][y] += w * sf->rgb[0]; A[CG][y] += w * sf->rgb[1]; A[CB][y] += w * sf->rgb[2];
+      T[y] = v16f_select(m, testT, T[y]);
+      NC[y] = (m & jid) | (~m & NC[y]);
+    }
+    if (((j - start) & 31) == 31) {
+      v16i all = DONE[0];
+      for (int yy = 1; yy < nrows; yy++) all &= DONE[yy];
+      if (!v16i_any(~all)) break;
+    }
+  }
+  r->tile_evals[tile] = evals;
+  const float *bg = r->s.background;
+  for (int y = 0; y < nrows; y++) {
+    size_t p = (size_t)(y0 + y) * W + x0;
+    for (int x = 0; x < ncols; x++) {
+      float t = T[y][x];
+      float *col = r->out_color + 3 * (p + x);
+      col[0] = A[CR][y][x] + t * bg[0];
+      col[1] = A[CG][y][x] + t * bg[1];
+      col[2] = A[CB][y][x] + t * bg[2];
+      r->out_alpha[p + x] = 1.0f - t;
+      r->out_depth[p + x] = A[DZ][y][x];
+      r->final_T[p + x] = t;
+      r->n_contrib[p + x] = NC[y][x];
+      if (!geo) continue;
+      float *n = r->s_normal + 3 * (p + x);
+      n[0] = A[N0][y][x]; n[1] = A[N1][y][x]; n[2] = A[N2][y][x];
+      r->s_median[p + x] = A[MED][y][x];
+      r->s_medid[p + x] = MID[y][x];
+      r->s_m1[p + x] = A[M1][y][x];
+      r->s_m2[p + x] = A[M2][y][x];
+      r->s_m0[p + x] = A[M0][y][x];
+      r->s_dist[p + x] = A[DI][y][x];
+    }
+  }
+}
+
+static void render_range(void *ctx, size_t b, size_t e) {
+  for (size_t t = b; t < e; t++) render_tile_impl(ctx, t, 0);
+}
+static void render_range_geo(void *ctx, size_t b, size_t e) {
+  for (size_t t = b; t < e; t++) render_tile_impl(ctx, t, 1);
+}
+
+void mgs_raster2d_render_tiles(mgs_raster *r) {
+  size_t nt = (size_t)r->tiles_x * r->tiles_y;
+  mgs_parallel_for(0, nt, 1, render_range, r);
+  double ev = 0;
+  for (size_t t = 0; t < nt; t++) ev += r->tile_evals[t];
+  r->evals_fwd = ev * 16.0;
+  r->s_grad_live = 0;
+  r->s_geo = 0;
+}
+
+void mgs_raster2d_geometry(mgs_raster *r) {
+  if (r->s_geo) return;
+  size_t nt = (size_t)r->tiles_x * r->tiles_y;
+  double ev = r->evals_fwd;
+  mgs_parallel_for(0, nt, 1, render_range_geo, r); /* the same compositing, rewritten bit for bit */
+  r->evals_fwd = ev;
+  r->s_geo = 1;
+}
+
+typedef struct bwd_ctx {
+  mgs_raster *r;
+  const float *dL_dcolor, *dL_dalpha, *dL_ddepth;
+  const float *gmed, *gnormal, *gdist; /* NULL: no map gradients */
+} bwd_ctx;
+
+/* Per pixel, with val_i = dL/dw_i (colour, sum w z, normal, and the distortion's
+ * m_i^2 A - 2 m_i M1 + M2 at the final sums) and S_i = sum_{j>i} val_j w_j:
+ *   dL/dalpha_i = T_i val_i - (S_i + T_final (bg.dL/dcolor - dL/dalpha_out)) / (1 - alpha_i)
+ * and dL/dz_i = w_i dL/ddepth + [i is the median] dL/dmedian + 2 w_i (m_i A - M1) dm/dz. */
+static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_ctx *bc, size_t tile, const int geo) {
+  mgs_raster *r = bc->r;
+  const int W = r->width, H = r->height;
+  int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
+  int x0 = tx * MGS_TILE_SIZE, y0 = ty * MGS_TILE_SIZE;
+  int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
+  int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
+  uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
+  if (start == end) { r->tile_evals[tile] = 0; return; }
+  enum { GR, GG, GB, GD, GN0, GN1, GN2, GM, GDI, FM1, FM2, FA, K, FM0, NIN };
+  v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], I[NIN][MGS_TILE_SIZE];
+  v16i NC[MGS_TILE_SIZE], MID[MGS_TILE_SIZE];
+  const float *bg = r->s.background;
+  int32_t maxn = 0, rowmax[MGS_TILE_SIZE];
+  for (int y = 0; y < MGS_TILE_SIZE; y++) {
+    T[y] = v16f_set1(1.0f);
+    S[y] = v16f_set1(0.0f);
+    for (int a = 0; a < NIN; a++) I[a][y] = v16f_set1(0.0f);
+    NC[y] = MID[y] = v16i_set1(0);
+    rowmax[y] = 0;
+    if (y >= nrows) continue;
+    size_t p = (size_t)(y0 + y) * W + x0;
+    for (int x = 0; x < ncols; x++) {
+      size_t q = p + x;
+      const float *dc = bc->dL_dcolor + 3 * q;
+      float tf = r->final_T[q];
+      T[y][x] = tf;
+      NC[y][x] = r->n_contrib[q];
+      if (NC[y][x] > rowmax[y]) rowmax[y] = NC[y][x];
+      I[GR][y][x] = dc[0]; I[GG][y][x] = dc[1]; I[GB][y][x] = dc[2];
+      I[GD][y][x] = bc->dL_ddepth ? bc->dL_ddepth[q] : 0.0f;
+      I[K][y][x] = tf * (bg[0] * dc[0] + bg[1] * dc[1] + bg[2] * dc[2] - (bc->dL_dalpha ? bc->dL_dalpha[q] : 0.0f));
+      if (geo) {
+        const float *gn = bc->gnormal + 3 * q;
+        I[GN0][y][x] = gn[0]; I[GN1][y][x] = gn[1]; I[GN2][y][x] = gn[2];
+        /* the median map is 0 (no gradient) where alpha < 0.5 */
+        I[GM][y][x] = tf < 0.5f ? bc->gmed[q] : 0.0f;
+        I[GDI][y][x] = bc->gdist[q];
+        MID[y][x] = r->s_medid[q];
+      }
+      if (geo) {
+        I[FM1][y][x] = r->s_m1[q];
+        I[FM2][y][x] = r->s_m2[q];
+        I[FM0][y][x] = r->s_m0[q];
+        I[FA][y][x] = 1.0f - tf;
+      }
+    }
+    if (rowmax[y] > maxn) maxn = rowmax[y];
+  }
+  v16f X;
+  for (int i = 0; i < 16; i++) X[i] = (float)(x0 + i) + 0.5f;
+  const v16f one = v16f_set1(1.0f), zero = v16f_set1(0.0f), amax = v16f_set1(MGS_ALPHA_MAX);
+  const float F = MGS_2DGS_FAR, N = MGS_2DGS_NEAR;
+  const v16f dmdz_c = v16f_set1(F * N / (F - N));
+  for (uint32_t j = start + (uint32_t)maxn; j < end; j++)
+    memset(r->sgrad + (size_t)r->isect_slot[j] * SG_STRIDE, 0, SG_STRIDE * sizeof(float));
+  uint32_t evals = 0;
+  for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
+    const mgs_surfel *sf = &r->surf[r->isect_idx[j]];
+    float *out = r->sgrad + (size_t)r->isect_slot[j] * SG_STRIDE;
+    v16i jid = v16i_set1((int32_t)(j - start));
+    v16i jid1 = v16i_set1((int32_t)(j - start + 1));
+    v16f ac[SG_COUNT];
+    for (int c = 0; c < SG_COUNT; c++) ac[c] = zero;
+    const v16f cr = v16f_set1(sf->rgb[0]), cg = v16f_set1(sf->rgb[1]), cb = v16f_set1(sf->rgb[2]);
+    const v16f n0 = v16f_set1(sf->n[0]), n1 = v16f_set1(sf->n[1]), n2 = v16f_set1(sf->n[2]);
+    int ylo, yhi;
+    row_span(sf, y0, nrows, &ylo, &yhi);
+    if (misses_cols(sf, x0, ncols)) yhi = -1;
+    isect_cols ic;
+    isect_cols_init(sf, X, &ic);
+    for (int y = ylo; y <= yhi; y++) {
+      if ((int32_t)(j - start) >= rowmax[y]) continue;
+      evals++;
+      float Y = (float)(y0 + y) + 0.5f;
+      isect_row e;
+      isect_eval(sf, &ic, Y, &e);
+      v16i m = e.m & (jid < NC[y]);
+      if (!v16i_any(m)) continue;
+      v16f inv = one / (one - e.alpha);
+      v16f Tn = v16f_select(m, T[y] * inv, T[y]);
+      T[y] = Tn;
+      v16f w = v16f_and(m, e.alpha * Tn);
+      v16f val = cr * I[GR][y] + cg * I[GG][y] + cb * I[GB][y] + e.z * I[GD][y];
+      v16f md = zero;
+      if (geo) {
+        md = v16f_select(m, depth_map(e.z) - I[FM0][y], zero);
+        val += n0 * I[GN0][y] + n1 * I[GN1][y] + n2 * I[GN2][y] +
+               I[GDI][y] * (md * md * I[FA][y] - 2.0f * md * I[FM1][y] + I[FM2][y]);
+        ac[SG_N] += w * I[GN0][y]; ac[SG_N + 1] += w * I[GN1][y]; ac[SG_N + 2] += w * I[GN2][y];
+      }
+      ac[SG_R] += w * I[GR][y]; ac[SG_G] += w * I[GG][y]; ac[SG_B] += w * I[GB][y];
+      v16f dLda = Tn * val - (S[y] + I[K][y]) * inv;
+      S[y] += val * w;
+      dLda = v16f_and(m & (e.raw < amax), dLda);
+      ac[SG_OP] += e.G * dLda;
+      v16f dLdG = v16f_set1(sf->opacity) * dLda;
+      /* depth of the intersection */
+      v16f dLdz = w * I[GD][y];
+      if (geo) {
+        v16f iz = one / v16f_select(m, e.z, one);
+        dLdz += v16f_and(m & (MID[y] == jid1), I[GM][y]) + 2.0f * w * (md * I[FA][y] - I[FM1][y]) * I[GDI][y] * dmdz_c * iz * iz;
+      }
+      dLdz = v16f_and(m, dLdz);
+      v16i use3 = e.rho3 <= e.rho2;
+      v16f gGs = v16f_and(use3, zero - e.G * dLdG); /* d rho3/ds = 2 s, dG/drho = -G/2 */
+      v16f gsx = gGs * e.sx + dLdz * sf->Tw[0];
+      v16f gsy = gGs * e.sy + dLdz * sf->Tw[1];
+      v16f g2 = v16f_and(m & ~use3, v16f_set1(-0.5f * MGS_2DGS_FILTER_INV2 * 2.0f) * e.G * dLdG);
+      ac[SG_CX] += g2 * ic.ddx;
+      ac[SG_CY] += g2 * e.ddy;
+      v16f ipz = v16f_rcp(v16f_select(m, e.pz, one));
+      v16f gpx = gsx * ipz, gpy = gsy * ipz, gpz = zero - (gpx * e.sx + gpy * e.sy);
+      gpx = v16f_and(m, gpx); gpy = v16f_and(m, gpy); gpz = v16f_and(m, gpz);
+      /* p = k x l: dL/dk = l x g, dL/dl = g x k */
+      v16f dkx = e.ly * gpz - e.lz * gpy, dky = e.lz * gpx - e.lx * gpz, dkz = e.lx * gpy - e.ly * gpx;
+      v16f dlx = gpy * ic.kz - gpz * ic.ky, dly = gpz * ic.kx - gpx * ic.kz, dlz = gpx * ic.ky - gpy * ic.kx;
+      ac[SG_T + 0] -= dkx; ac[SG_T + 1] -= dky; ac[SG_T + 2] -= dkz;
+      ac[SG_T + 3] -= dlx; ac[SG_T + 4] -= dly; ac[SG_T + 5] -= dlz;
+      ac[SG_T + 6] += X * dkx + Y * dlx + dLdz * e.sx;
+      ac[SG_T + 7] += X * dky + Y * dly + dLdz * e.sy;
+      ac[SG_T + 8] += X * dkz + Y * dlz + dLdz;
+    }
+    for (int c = 0; c < SG_COUNT; c++) out[c] = v16f_sum(ac[c]);
+    for (int c = SG_COUNT; c < SG_STRIDE; c++) out[c] = 0;
+  }
+  r->tile_evals[tile] = evals;
+}
+
+static void backward_range(void *ctx, size_t b, size_t e) {
+  const bwd_ctx *bc = ctx;
+  if (bc->gnormal) for (size_t t = b; t < e; t++) backward_tile_impl(bc, t, 1);
+  else for (size_t t = b; t < e; t++) backward_tile_impl(bc, t, 0);
+}
+
+mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
+                                       const float *dL_ddepth, mgs_error *err) {
+  if (r->n_isect > r->cap_sgrad) {
+    size_t c = r->n_isect + r->n_isect / 4;
+    free(r->sgrad);
+    r->sgrad = aligned_alloc(64, (c ? c : 1) * SG_STRIDE * sizeof(float));
+    r->cap_sgrad = r->sgrad ? c : 0;
+    if (!r->sgrad)
+      return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_tiles.c: out of memory for %zu intersections", r->n_isect);
+  }
+  bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, NULL, NULL};
+  if (r->s_grad_live) { bc.gmed = r->s_gmed; bc.gnormal = r->s_gnormal; bc.gdist = r->s_gdist; }
+  size_t nt = (size_t)r->tiles_x * r->tiles_y;
+  mgs_parallel_for(0, nt, 1, backward_range, &bc);
+  double ev = 0;
+  for (size_t t = 0; t < nt; t++) ev += r->tile_evals[t];
+  r->evals_bwd = ev * 16.0;
+  return MGS_OK;
+}
+
+mgs_status mgs_raster_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_error *err) {
+  if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_2dgs_tiles.c: NULL argument");
+  if (!r->have_forward || !r->surfel)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_2dgs_tiles.c: map gradients need a forward of a 2DGS model");
+  size_t npix = (size_t)r->width * r->height;
+  mgs_raster2d_geometry(r); /* their backward reads the geometry pass's sums */
+  if (!r->s_grad_live) {
+    memset(r->s_gmed, 0, npix * sizeof(float));
+    memset(r->s_gnormal, 0, 3 * npix * sizeof(float));
+    memset(r->s_gdist, 0, npix * sizeof(float));
+    r->s_grad_live = 1;
+  }
+  out->depth_median = r->s_gmed;
+  out->normal = r->s_gnormal;
+  out->distortion = r->s_gdist;
+  return MGS_OK;
+}

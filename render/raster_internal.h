@@ -83,6 +83,9 @@ struct mgs_raster {
   float *map_gnormal;      /* per Gaussian: unit normal facing the camera (3) */
   float *map_expected, *map_median, *map_normal;
 
+  /* blending statistics (raster_blend.c), allocated on the first request only */
+  struct mgs_raster_blend_buf *blend;
+
   /* statistics of the last calls (benchmark) */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
   mgs_raster_profile prof;
@@ -119,6 +122,8 @@ double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
 mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
+/* raster_blend.c */
+void mgs_raster_blend_free(mgs_raster *r);
 
 /* The forward's per-pixel evaluation, shared so forward and backward agree bit for bit. */
 #define MGS_ALPHA_MIN (1.0f / 255.0f)

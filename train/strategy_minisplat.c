@@ -8,6 +8,7 @@
 #include <string.h>
 #include "train/mgs_minisplat.h"
 #include "core/mgs_math.h"
+#include "core/mgs_log.h"
 
 void mgs_minisplat_options_default(mgs_minisplat_options *o) {
   memset(o, 0, sizeof *o);
@@ -387,17 +388,23 @@ static mgs_status ms_post(void *self, mgs_strategy_step *s, mgs_error *err) {
       s->replaced_groups = all;
     }
     if (reinit_iteration(m, it) && s->trainer) {
+      size_t n0 = g->n;
       if ((st = reinit(m, s, err))) return st;
+      mgs_info("mini-splatting: iteration %d: depth reinitialisation, %zu -> %zu Gaussians", it, n0, g->n);
       s->replaced_groups = all;
     }
   }
   if (it == m->o.simplify1 && s->trainer) {
+    size_t n0 = g->n;
     if (!m->o.dense && (st = simplify_sample(m, s, err))) return st;
+    mgs_info("mini-splatting: iteration %d: simplification, %zu -> %zu Gaussians", it, n0, g->n);
     if ((st = reset_in_place(m, s, err))) return st;
     s->replaced_groups = all;
   }
   if (!m->o.dense && it == m->o.simplify2 && s->trainer) {
+    size_t n0 = g->n;
     if ((st = simplify_prune(m, s, err))) return st;
+    mgs_info("mini-splatting: iteration %d: 1 %% importance cut, %zu -> %zu Gaussians", it, n0, g->n);
     s->replaced_groups = all;
   }
   return MGS_OK;

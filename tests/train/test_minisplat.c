@@ -395,7 +395,7 @@ static void in_trainer(void) {
   CHECK_OK(mgs_trainer_run(t, &err), &err);
   double psnr, ssim;
   CHECK_OK(mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &psnr, &ssim, &err), &err);
-  fprintf(stderr, "mini-splatting: %zu -> %zu (reinit) ... %zu (simplified) ... %zu Gaussians, test PSNR %.2f\n", n29,
+  fprintf(stderr, "mini-splatting: %zu -> %zu (reinit) ... %zu (before simplifying) ... %zu Gaussians, test PSNR %.2f\n", n29,
           nv * (n29 / nv), n59, mgs_trainer_model(t)->n, psnr);
   CHECK(isfinite(psnr) && psnr > 12);
   mgs_trainer_destroy(t);

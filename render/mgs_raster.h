@@ -124,6 +124,19 @@ typedef struct mgs_raster_map_grad {
   float *depth_median, *normal, *distortion;
 } mgs_raster_map_grad;
 mgs_status mgs_raster_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_error *err);
+/* Blending statistics of the last forward on this context (what Mini-Splatting reads), by
+ * one more pass over its tile lists with its alpha decisions (a forward not followed by
+ * this call costs nothing more); w = alpha*T is a Gaussian's blending weight in a pixel.
+ * The forward's model must be unchanged; valid until the next forward on this context. */
+typedef struct mgs_raster_blend {
+  int width, height;
+  size_t n;                 /* Gaussians of the forward */
+  const int32_t *max_index; /* per pixel: the first Gaussian (depth order) with the largest w; -1 none */
+  const float *final_T;     /* per pixel: transmittance after the last contribution */
+  const uint32_t *area_max; /* per Gaussian: pixels where it is max_index */
+  const float *importance;  /* per Gaussian: sum of its w over the view's pixels */
+} mgs_raster_blend;
+mgs_status mgs_raster_blend_stats(mgs_raster *r, mgs_raster_blend *out, mgs_error *err);
 
 /* dL_dcolor: height*width*3 (required); dL_dalpha, dL_ddepth: height*width or NULL.
  * Gradients are ADDED into `grad` (a model with the same n; its groups are used as

@@ -29,6 +29,7 @@ static void free_all(mgs_raster *r) {
   free(r->out_color); free(r->out_alpha); free(r->out_depth); free(r->final_T); free(r->n_contrib);
   free(r->map_gnormal); free(r->map_expected); free(r->map_median); free(r->map_normal);
   mgs_raster2d_free(r);
+  mgs_raster_blend_free(r);
 }
 
 void mgs_raster_destroy(mgs_raster *r) {

@@ -113,6 +113,8 @@ struct mgs_raster {
   float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */
   int s_grad_live;         /* the map gradients were handed out since the forward */
   int s_geo;               /* the geometry pass (normal, median, distortion) ran since the forward */
+  /* blending statistics (raster_blend.c), allocated on the first request only */
+  struct mgs_raster_blend_buf *blend;
 
   /* statistics of the last calls (benchmark) */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
@@ -150,6 +152,8 @@ double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
 mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
+/* raster_blend.c */
+void mgs_raster_blend_free(mgs_raster *r);
 
 /* raster_2dgs_project.c / raster_2dgs_tiles.c: the surfel model's projection (idx NULL:
  * all), compositing, backward and maps */

@@ -6,6 +6,8 @@
 #include "train/mgs_config.h"
 #include "core/mgs_core.h"
 
+#define NOT_DIST_MS_REASON "Mini-Splatting renders every training view for its global reinitialisation and simplification; the distributed trainer has no such pass"
+
 static void *field(mgs_train_config *c, const mgs_option *o) { return (char *)c + o->offset; }
 static const void *cfield(const mgs_train_config *c, const mgs_option *o) { return (const char *)c + o->offset; }
 static size_t index_of(const mgs_option *o) {
@@ -387,6 +389,8 @@ mgs_status mgs_config_validate(const mgs_train_config *c, int ranks, mgs_error *
         return mgs_error_set(err, MGS_ERR_ARG, "--%s %s: not with --mpi on %d processes (%s)", t[i].name, a, ranks,
                              t[i].mpi_reason ? t[i].mpi_reason : "not supported");
     }
+    if (c->strategy == MGS_STRAT_MINISPLAT || c->strategy == MGS_STRAT_MINISPLAT_D)
+      return mgs_error_set(err, MGS_ERR_ARG, "--strategy %s: not with --mpi on %d processes (%s)", mgs_config_enum_name(c, "strategy"), ranks, NOT_DIST_MS_REASON);
     if (c->strategy == MGS_STRAT_MORSE) return mgs_error_set(err, MGS_ERR_ARG, "--strategy morse: not with --mpi on %d processes (%s)", ranks, "the Morse analysis is global; the distributed trainer has none yet");
     if (c->init != MGS_INIT_SFM) return mgs_error_set(err, MGS_ERR_ARG, "--init %s: not with --mpi on %d processes (each rank initialises its block from the dataset's points)", mgs_config_enum_name(c, "init"), ranks);
   } else {
@@ -461,7 +465,27 @@ static int set_here(const mgs_train_config *c, const char *name) {
 }
 #define TAKE(name, dst, val) do { if (set_here(c, name)) (dst) = (val); } while (0)
 
+/* ---- --schedule-scale: the one place where iteration milestones are scaled ---- */
+int mgs_config_scale_iteration(const mgs_train_config *c, int iteration) {
+  if (iteration <= 0 || c->schedule_scale == 1.0) return iteration;
+  double v = floor((double)iteration * c->schedule_scale + 0.5);
+  return v < 1 ? 1 : v > 2e9 ? 2000000000 : (int)v;
+}
+
+void mgs_config_scheduled(const mgs_train_config *c, mgs_train_config *out) {
+  if (out != c) *out = *c;
+  if (c->schedule_scale == 1.0) return;
+  int *ms[] = {&out->sh_every, &out->densify_from, &out->densify_until, &out->densify_every,
+               &out->opacity_reset_every, &out->position_lr_max_steps, &out->morse_every, &out->morse_warmup,
+               &out->morse_until, &out->pers_loss_schedule[0], &out->pers_loss_schedule[1],
+               &out->pers_loss_schedule[2]};
+  for (size_t i = 0; i < sizeof ms / sizeof ms[0]; i++) *ms[i] = mgs_config_scale_iteration(c, *ms[i]);
+  out->schedule_scale = 1.0; /* applied */
+}
+#define SCHEDULED(c) mgs_train_config sched_; mgs_config_scheduled(c, &sched_); c = &sched_
+
 void mgs_config_train_options(const mgs_train_config *c, mgs_train_options *o) {
+  SCHEDULED(c);
   mgs_train_options_default(o);
   o->iterations = c->iters;
   o->sh_degree = c->sh_degree;
@@ -506,6 +530,7 @@ void mgs_config_dataset_options(const mgs_train_config *c, mgs_dataset_options *
 }
 
 int mgs_config_morse_options(const mgs_train_config *c, mgs_morse_options *o) {
+  SCHEDULED(c);
   mgs_morse_options_default(o);
   static const mgs_morse_spawn spawn[] = {MGS_MORSE_SPAWN_GAPS, MGS_MORSE_SPAWN_GAPS, MGS_MORSE_SPAWN_LITERAL, MGS_MORSE_SPAWN_NONE};
   static const mgs_morse_prune prune[] = {MGS_MORSE_PRUNE_FLOATERS, MGS_MORSE_PRUNE_FLOATERS, MGS_MORSE_PRUNE_LITERAL, MGS_MORSE_PRUNE_NONE};
@@ -545,6 +570,7 @@ void mgs_config_lpvi_options(const mgs_train_config *c, mgs_lpvi_options *o) {
 }
 
 int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options *o) {
+  SCHEDULED(c);
   mgs_persloss_options_default(o);
   o->lambda = c->pers_loss;
   o->form = (mgs_persloss_form)c->pers_loss_form;
@@ -558,6 +584,9 @@ int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options 
 
 int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o) {
   mgs_normal_options_default(o);
+  o->from_iter = mgs_config_scale_iteration(c, o->from_iter);
+  o->until_iter = mgs_config_scale_iteration(c, o->until_iter);
+  o->every = mgs_config_scale_iteration(c, o->every);
   o->gamma = c->normal_loss;
   if (c->iters < 2 * o->from_iter) o->from_iter = c->iters / 2 > 0 ? c->iters / 2 : 1; /* short runs: the second half */
   return c->normal_loss > 0;
@@ -570,4 +599,17 @@ int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term
   if (c->iters < o->dist_from) o->dist_from = c->iters / 2 > 0 ? c->iters / 2 : 1;       /* short runs: */
   if (c->iters < o->normal_from) o->normal_from = (3 * c->iters) / 4 > 0 ? (3 * c->iters) / 4 : 1; /* the later part */
   return c->model == MGS_MODEL_2DGS;
+int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_options *o) {
+  mgs_minisplat_options_default(o);
+  mgs_train_options to;
+  mgs_config_train_options(c, &to); /* ADC's settings, scaled */
+  o->adc = to.adc;
+  o->dense = c->strategy == MGS_STRAT_MINISPLAT_D;
+  o->reinit_every = mgs_config_scale_iteration(c, o->reinit_every);
+  o->simplify1 = o->dense ? o->adc.densify_until : mgs_config_scale_iteration(c, o->simplify1);
+  o->simplify2 = mgs_config_scale_iteration(c, o->simplify2);
+  o->lr_restart = mgs_config_scale_iteration(c, o->lr_restart);
+  o->simplify_fraction = c->simplify_fraction;
+  o->depth_points = (size_t)c->ms_depth_points;
+  return c->strategy == MGS_STRAT_MINISPLAT || c->strategy == MGS_STRAT_MINISPLAT_D;
 }

@@ -13,6 +13,7 @@
 #define MPI MGS_OPT_MPI
 #define OPT MGS_OPT_OPTIONAL
 #define NOT_DIST "the distributed trainer has no global analysis or loss of this kind yet (docs/notes/scale.md)"
+#define NOT_DIST_MS "Mini-Splatting renders every training view for its global reinitialisation and simplification"
 #define NOT_DIST_INIT "each rank initialises its block from the dataset's points"
 
 static const mgs_option TABLE[] = {
@@ -52,8 +53,8 @@ static const mgs_option TABLE[] = {
    "COLMAP/nerfstudio: every Nth view is a test view", NULL},
   {"seed", "seed", MGS_OPT_U64, F(seed), "0", 0, 0, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
    "random seed (rank K of --mpi uses S + K)", NULL},
-  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none", NULL, MGS_GROUP_BASELINE, REC | MPI,
-   "density control: adc (the reference's), morse (MorseGS, below) or none", NULL},
+  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none|mini-splatting|mini-splatting-d", NULL, MGS_GROUP_BASELINE, REC | MPI,
+   "density control: adc (the reference's), morse (MorseGS, below), none, mini-splatting(-d) (Fang & Wang 2024)", NULL},
   {"init", "init", MGS_OPT_ENUM, F(init), "sfm", 0, 0, "sfm|random|levelset|lpvi", NULL, MGS_GROUP_BASELINE, REC | MPI,
    "initial Gaussians: dataset points (random when it has none), random, MorseGS level sets, LPVI (Topology-GS)", NULL},
   {"random-points", "random_points", MGS_OPT_INT, F(random_points), "100000", 1, BIG, NULL, NULL, MGS_GROUP_BASELINE,
@@ -92,6 +93,14 @@ static const mgs_option TABLE[] = {
    "log-scale learning rate", NULL},
   {"rotation-lr", "rotation_lr", MGS_OPT_DOUBLE, F(rotation_lr), "0.001", 0, 10, NULL, NULL, MGS_GROUP_BASELINE,
    REC | MPI, "rotation learning rate", NULL},
+  {"schedule-scale", "schedule_scale", MGS_OPT_DOUBLE, F(schedule_scale), "1", 1e-4, 100, NULL, NULL, MGS_GROUP_BASELINE,
+   REC | MPI, "multiplies every iteration milestone (densify, resets, SH steps, lr decay, MorseGS W/K, PersLoss, "
+   "Mini-Splatting): 0.25 = the reference schedule compressed into --iters 7500", NULL},
+  {"simplify-fraction", "simplify_fraction", MGS_OPT_DOUBLE, F(simplify_fraction), "0.5", 1e-3, 1, NULL, NULL,
+   MGS_GROUP_BASELINE, REC, "mini-splatting: share of Gaussians its first simplification samples (0.3: large scenes)",
+   NOT_DIST_MS},
+  {"ms-depth-points", "ms_depth_points", MGS_OPT_INT, F(ms_depth_points), "0", 0, BIG, NULL, NULL, MGS_GROUP_BASELINE,
+   REC, "mini-splatting: points of a depth reinitialisation (authors: 3.5M; 0 = the model's count then)", NOT_DIST_MS},
   {"freeze", "freeze", MGS_OPT_BOOL, F(freeze), "0", 0, 1, NULL, "1", MGS_GROUP_BASELINE, REC,
    "diagnostic: never update the parameters (test calibration)", "a diagnostic of the serial trainer"},
 

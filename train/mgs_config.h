@@ -27,6 +27,7 @@
 #include "train/mgs_persloss.h"
 #include "train/mgs_term_normal.h"
 #include "train/mgs_term_2dgs.h"
+#include "train/mgs_minisplat.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -34,7 +35,7 @@ extern "C" {
 
 /* Enumerations the table names (values in the order of the names in config_table.h). */
 typedef enum { MGS_BG_AUTO, MGS_BG_WHITE, MGS_BG_BLACK } mgs_cfg_background;
-typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE } mgs_cfg_strategy;
+typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_MINISPLAT, MGS_STRAT_MINISPLAT_D } mgs_cfg_strategy;
 typedef enum { MGS_INIT_SFM, MGS_INIT_RANDOM, MGS_INIT_LEVELSET, MGS_INIT_LPVI } mgs_cfg_init;
 typedef enum { MGS_AUTO_OFF_ON_AUTO, MGS_AUTO_OFF_ON_ON, MGS_AUTO_OFF_ON_OFF } mgs_cfg_tristate; /* auto|on|off */
 typedef enum { MGS_ADAM_AUTO, MGS_ADAM_SPARSE, MGS_ADAM_DENSE } mgs_cfg_adam;
@@ -64,6 +65,8 @@ typedef struct mgs_train_config {
   int position_lr_max_steps;
   double feature_lr, feature_rest_lr, opacity_lr, scaling_lr, rotation_lr;
   int freeze;
+  double schedule_scale, simplify_fraction; /* every milestone x s; Mini-Splatting */
+  int ms_depth_points;
   /* large scenes */
   int visibility;
   double vis_tile;
@@ -174,6 +177,14 @@ int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options 
 int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term_options *o);
 /* The normal loss; returns 1 if it is on (its start moved to half a run shorter than twice it). */
 int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o);
+/* Mini-Splatting (-D); returns 1 if --strategy is one of them. */
+int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_options *o);
+/* --schedule-scale applied: a copy of c with every iteration milestone times the scale
+ * (rounded, periods at least 1, 0 = off kept); every layer's options above are built
+ * from it, so no strategy or term scales anything itself. */
+void mgs_config_scheduled(const mgs_train_config *c, mgs_train_config *out);
+/* A reference milestone (Mini-Splatting's 5000, the normal loss' 3000) under the scale. */
+int mgs_config_scale_iteration(const mgs_train_config *c, int iteration);
 /* Names of enum values (for messages and records). */
 const char *mgs_config_enum_name(const mgs_train_config *c, const char *option);
 

@@ -31,6 +31,10 @@ typedef struct mgs_strategy_step {
   /* out: groups whose tensors the hook replaced (1 << group); the trainer skips Adam for
    * them this iteration, as torch does for a fresh parameter without a gradient. */
   unsigned replaced_groups;
+  /* For strategies that render (Mini-Splatting): the context of this iteration's forward
+   * (untouched since it in pre_backward) and the trainer (its train views and images). */
+  mgs_raster *raster;
+  struct mgs_trainer *trainer;
 } mgs_strategy_step;
 
 typedef struct mgs_strategy_ops {
@@ -46,6 +50,10 @@ typedef struct mgs_strategy_ops {
    * replaces no group. The trainer then runs the backward and Adam fused, before the hook
    * (which sees the stepped model). NULL: never. */
   int (*fusable)(void *self, const mgs_strategy_step *s);
+  /* Optional: at the start of `iteration`, the step of the position-lr schedule (*lr_step,
+   * preset to the iteration) and the highest SH degree the trainer may raise to (*sh_max,
+   * preset to the model's). NULL: the reference's schedule. */
+  void (*schedule)(void *self, int iteration, int *lr_step, int *sh_max);
 } mgs_strategy_ops;
 
 typedef struct mgs_strategy {
@@ -72,6 +80,9 @@ mgs_adc_state *mgs_strategy_adc_state(mgs_strategy *s, size_t n_gaussians);
  * size pruning (the reference enables it after the first opacity reset). */
 mgs_status mgs_adc_densify_and_prune(mgs_strategy *s, mgs_gaussians *g, mgs_adam *a, double extent,
                                      int prune_big, mgs_rng *rng, mgs_error *err);
+/* The same, also splitting every Gaussian with force_split[i] != 0 (g->n entries). */
+mgs_status mgs_adc_densify_and_prune_mask(mgs_strategy *s, mgs_gaussians *g, mgs_adam *a, double extent,
+                                          int prune_big, const uint8_t *force_split, mgs_rng *rng, mgs_error *err);
 /* Opacity reset: opacity = min(alpha, 0.01) as a logit; zeroes the opacity moments. */
 void mgs_adc_reset_opacity(mgs_gaussians *g, mgs_adam *a);
 

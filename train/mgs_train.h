@@ -244,6 +244,10 @@ void mgs_trainer_image_cache_stats(const mgs_trainer *t, size_t *hits, size_t *m
 /* Visibility figures: Gaussians projected per iteration (mean so far), occupied tiles,
  * tile side (0s when visibility is off). */
 void mgs_trainer_visibility_stats(const mgs_trainer *t, double *listed_per_iter, size_t *tiles, double *tile_size);
+/* The dataset, and the ground truth of train view i (h*w*3 floats, valid until the next
+ * call or iteration): for strategies that render every train view (Mini-Splatting). */
+const mgs_dataset *mgs_trainer_dataset(const mgs_trainer *t);
+mgs_status mgs_trainer_train_image(mgs_trainer *t, size_t i, const float **rgb, mgs_error *err);
 /* Mean PSNR and SSIM over a split's views (images loaded on demand). */
 mgs_status mgs_trainer_evaluate(mgs_trainer *t, mgs_split split, size_t max_views,
                                 double *psnr, double *ssim, mgs_error *err);

@@ -118,6 +118,11 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
     goto fail;
   }
   if (c->strategy == MGS_STRAT_MORSE && (st = mgs_strategy_morse_create(&o->adc, out->morse, &strat, err))) goto fail;
+  mgs_minisplat_options mso;
+  if (mgs_config_minisplat_options(c, &mso)) {
+    mso.adc = o->adc; /* the trainer's (scaled) ADC settings */
+    if ((st = mgs_strategy_minisplat_create(&mso, &strat, err))) goto fail;
+  }
   st = mgs_trainer_create(ds, o, g0, strat, &out->trainer, err); /* owns g0 and strat from here */
   g0 = NULL;
   if (st) goto fail;

@@ -83,8 +83,10 @@ void mgs_adc_reset_opacity(mgs_gaussians *g, mgs_adam *a) {
   if (a) mgs_adam_reset_group(a, MGS_PARAM_OPACITY);
 }
 
+/* force_split (n0 entries or NULL): also split these, whatever their gradient and size
+ * (Mini-Splatting's blur split; a Gaussian may then be cloned and split, as there). */
 static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, double extent,
-                                    int prune_big, mgs_rng *rng, mgs_error *err) {
+                                    int prune_big, const uint8_t *force_split, mgs_rng *rng, mgs_error *err) {
   const mgs_adc_options *o = &a->o;
   size_t n0 = g->n;
   if (a->st.n != n0) { mgs_status st = adc_resize(a, n0, err); if (st) return st; }
@@ -94,9 +96,10 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
   const float dense = (float)(o->percent_dense * extent);
   for (size_t i = 0; i < n0; i++) {
     float gm = a->st.count[i] ? a->st.grad_accum[i] / (float)a->st.count[i] : 0.0f;
-    if (!(gm >= o->grad_threshold)) continue;
-    if (max_scale(g, i) <= dense) { sel[i] = 1; n_clone++; }
-    else { sel[i] = 2; n_split++; }
+    if (gm >= o->grad_threshold) sel[i] = max_scale(g, i) <= dense ? 1 : 2;
+    if (force_split && force_split[i]) sel[i] |= 2;
+    n_clone += sel[i] & 1;
+    n_split += (sel[i] & 2) >> 1;
   }
   int N = o->split_n;
   size_t first = 0, add = n_clone + (size_t)N * n_split;
@@ -105,11 +108,11 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
   /* the reference appends the clones first, then the split samples */
   size_t w = first;
   for (size_t i = 0; i < n0; i++)
-    if (sel[i] == 1) copy_row(g, w++, i);
+    if (sel[i] & 1) copy_row(g, w++, i);
   /* 2DGS surfels: samples at 0 sigma along the normal, the unused third scale kept */
   const int surfel = g->kind == MGS_MODEL_2DGS;
   for (size_t i = 0; i < n0; i++) {
-    if (sel[i] != 2) continue;
+    if (!(sel[i] & 2)) continue;
     float s[3], R[9];
     for (int k = 0; k < 3; k++) s[k] = expf(g->log_scale[3 * i + k]);
     if (surfel) s[2] = 0;
@@ -129,7 +132,7 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
   if (!keep) { free(sel); return mgs_error_set(err, MGS_ERR_NOMEM, "adc: out of memory"); }
   const float world_cap = (float)(o->max_world_scale * extent);
   for (size_t i = 0; i < n1; i++) {
-    int drop = i < n0 && sel[i] == 2; /* split originals */
+    int drop = i < n0 && (sel[i] & 2); /* split originals */
     drop |= mgs_sigmoidf(g->opacity[i]) < o->min_opacity;
     if (prune_big) {
       int rad = i < n0 ? a->st.max_radii[i] : 0;
@@ -165,7 +168,7 @@ static mgs_status adc_post(void *self, mgs_strategy_step *s, mgs_error *err) {
   }
   if (it > o->densify_from && o->densify_every > 0 && it % o->densify_every == 0) {
     int prune_big = o->opacity_reset_every > 0 && it > o->opacity_reset_every;
-    mgs_status st = densify_and_prune(a, g, s->adam, s->extent, prune_big, s->rng, err);
+    mgs_status st = densify_and_prune(a, g, s->adam, s->extent, prune_big, NULL, s->rng, err);
     if (st) return st;
     s->replaced_groups = (1u << MGS_PARAM_COUNT) - 1;
   }
@@ -221,7 +224,7 @@ static void adc_destroy(void *self) {
   free(a);
 }
 
-static const mgs_strategy_ops adc_ops = {"adc", adc_pre, adc_post, adc_save, adc_load, adc_destroy, adc_fusable};
+static const mgs_strategy_ops adc_ops = {"adc", adc_pre, adc_post, adc_save, adc_load, adc_destroy, adc_fusable, NULL};
 
 mgs_strategy *mgs_strategy_adc_create(const mgs_adc_options *o) {
   mgs_strategy *s = calloc(1, sizeof *s);
@@ -249,5 +252,11 @@ mgs_adc_state *mgs_strategy_adc_state(mgs_strategy *s, size_t n_gaussians) {
 mgs_status mgs_adc_densify_and_prune(mgs_strategy *s, mgs_gaussians *g, mgs_adam *opt, double extent,
                                      int prune_big, mgs_rng *rng, mgs_error *err) {
   if (!s || s->ops != &adc_ops) return mgs_error_set(err, MGS_ERR_ARG, "not an adc strategy");
-  return densify_and_prune(s->self, g, opt, extent, prune_big, rng, err);
+  return densify_and_prune(s->self, g, opt, extent, prune_big, NULL, rng, err);
+}
+
+mgs_status mgs_adc_densify_and_prune_mask(mgs_strategy *s, mgs_gaussians *g, mgs_adam *opt, double extent,
+                                          int prune_big, const uint8_t *force_split, mgs_rng *rng, mgs_error *err) {
+  if (!s || s->ops != &adc_ops) return mgs_error_set(err, MGS_ERR_ARG, "not an adc strategy");
+  return densify_and_prune(s->self, g, opt, extent, prune_big, force_split, rng, err);
 }

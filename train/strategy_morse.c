@@ -406,7 +406,7 @@ static void ms_destroy(void *self) {
   free(m);
 }
 
-static const mgs_strategy_ops morse_ops = {"morse", ms_pre, ms_post, ms_save, ms_load, ms_destroy, ms_fusable};
+static const mgs_strategy_ops morse_ops = {"morse", ms_pre, ms_post, ms_save, ms_load, ms_destroy, ms_fusable, NULL};
 
 mgs_status mgs_strategy_morse_create(const mgs_adc_options *adc, mgs_morse_ctx *ctx, mgs_strategy **out, mgs_error *err) {
   *out = NULL;

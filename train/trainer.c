@@ -229,8 +229,10 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   double t0 = mgs_now();
   double ext = t->ds->extent > 0 ? t->ds->extent : 1.0;
   int64_t lr_steps = o->lr_mean_max_steps > 0 ? o->lr_mean_max_steps : o->iterations;
-  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(it, o->lr_mean_init * ext, o->lr_mean_final * ext, lr_steps);
-  if (o->sh_every > 0 && it % o->sh_every == 0 && t->active_sh < o->sh_degree) t->active_sh++;
+  int lr_it = it, sh_max = o->sh_degree;
+  if (t->strategy && t->strategy->ops->schedule) t->strategy->ops->schedule(t->strategy->self, it, &lr_it, &sh_max);
+  t->adam->lr[MGS_PARAM_MEAN] = (float)mgs_expon_lr(lr_it, o->lr_mean_init * ext, o->lr_mean_final * ext, lr_steps);
+  if (o->sh_every > 0 && it % o->sh_every == 0 && t->active_sh < sh_max) t->active_sh++;
   t->adam->sh_rest_active = (t->active_sh + 1) * (t->active_sh + 1) - 1;
 
   if (t->perm_pos >= t->perm_len) shuffle(t);
@@ -264,6 +266,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   ss.iteration = it; ss.model = t->g; ss.adam = t->adam;
   ss.grad_mean2d = t->gm2d; ss.radii = ro.radii; ss.width = ro.width; ss.height = ro.height;
   ss.extent = ext; ss.rng = &t->rng;
+  ss.raster = t->raster; ss.trainer = t;
   /* the reference does no optimizer step on the last iteration, and none on tensors the
      strategy replaced in this one; its last densification would change a model it never
      saves, so the last iteration runs neither (see mgs_trainer_run_to) */
@@ -443,4 +446,11 @@ mgs_status mgs_trainer_edit_model(mgs_trainer *t, const uint8_t *keep, size_t ad
   t->grad_clean = 0; /* the gradient rows no longer match the model's */
   mgs_trainer_large_invalidate(t);
   return MGS_OK;
+}
+
+const mgs_dataset *mgs_trainer_dataset(const mgs_trainer *t) { return t->ds; }
+mgs_status mgs_trainer_train_image(mgs_trainer *t, size_t i, const float **rgb, mgs_error *err) {
+  if (i >= t->ds->n_views[MGS_SPLIT_TRAIN])
+    return mgs_error_set(err, MGS_ERR_ARG, "train view %zu of %zu", i, t->ds->n_views[MGS_SPLIT_TRAIN]);
+  return mgs_trainer_large_image(t, i, rgb, err);
 }

@@ -132,9 +132,10 @@ void mgs_sugar_mesh_options_default(mgs_sugar_mesh_options *o);
 typedef struct mgs_sugar_mesh_stats {
   size_t points, poisson_vertices, poisson_triangles, trimmed_vertices, triangles;
 } mgs_sugar_mesh_stats;
-/* Level crossings of d (factor 1) along the rays of `views` (their rendered expected
- * depth), with normals −∇d; then Poisson reconstruction, trimming and decimation
- * (train/mgs_poisson.h). *out: the mesh in world coordinates (model origin added). */
+/* Level crossings of d (factor 1) along the rays of `views` (their rendered median depth),
+ * with normals −∇d; then Poisson reconstruction, trimming and decimation
+ * (train/mgs_poisson.h). `views`: cameras in the model's local frame (as a dataset's;
+ * cameras.json minus the origin). *out: the mesh in world coordinates (origin added). */
 mgs_status mgs_sugar_mesh(const mgs_gaussians *g, const mgs_camera *views, size_t n_views,
                           const mgs_sugar_mesh_options *o, mgs_mesh **out, mgs_sugar_mesh_stats *stats,
                           mgs_error *err);

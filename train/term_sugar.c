@@ -67,10 +67,9 @@ static double depth_at(const float *D, int w, int h, double u, double v) {
   return a * (1 - fy) + b * fy;
 }
 
-static int project(const mgs_camera *cam, const double origin[3], const double p[3], double *u, double *v,
-                   double *z) {
-  double w[3] = {origin[0] + p[0], origin[1] + p[1], origin[2] + p[2]};
-  return mgs_camera_project(cam, w, u, v, z);
+/* The training views' cameras are in the model's local frame (core/dataset.c moves them). */
+static int project(const mgs_camera *cam, const double p[3], double *u, double *v, double *z) {
+  return mgs_camera_project(cam, p, u, v, z);
 }
 
 static mgs_status sdf_step(sugar_term *t, mgs_term_step *s, mgs_error *err) {
@@ -96,7 +95,7 @@ static mgs_status sdf_step(sugar_term *t, mgs_term_step *s, mgs_error *err) {
   for (size_t i = 0; i < g->n; i++) {
     if (s->radii[i] <= 0) continue;
     double mu[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, u, v, z;
-    if (project(cam, g->origin, mu, &u, &v, &z) && z > zmax) zmax = z;
+    if (project(cam, mu, &u, &v, &z) && z > zmax) zmax = z;
   }
   float *D = malloc(np * sizeof *D);
   if (!D) return mgs_error_set(err, MGS_ERR_NOMEM, "sugar: out of memory for a depth map");
@@ -114,9 +113,9 @@ static mgs_status sdf_step(sugar_term *t, mgs_term_step *s, mgs_error *err) {
     mgs_gauss_local L;
     mgs_gauss_local_get(g, i, &L);
     double u, v, z;
-    if (!project(cam, g->origin, L.mu, &u, &v, &z)) continue;
+    if (!project(cam, L.mu, &u, &v, &z)) continue;
     double dir[3], len = 0;
-    for (int a = 0; a < 3; a++) { dir[a] = cc[a] - (g->origin[a] + L.mu[a]); len += dir[a] * dir[a]; }
+    for (int a = 0; a < 3; a++) { dir[a] = cc[a] - L.mu[a]; len += dir[a] * dir[a]; }
     len = sqrt(len);
     double sig = 0; /* |S Rᵀ v|: the authors' standard deviation toward the camera */
     for (int a = 0; a < 3; a++) {
@@ -144,7 +143,7 @@ static mgs_status sdf_step(sugar_term *t, mgs_term_step *s, mgs_error *err) {
       for (int a = 0; a < 3; a++) e[a] = o->sample_scale * sqrt(L.s2[a]) * mgs_rng_normal(s->rng);
       for (int a = 0; a < 3; a++) p[a] = L.mu[a] + L.R[3 * a] * e[0] + L.R[3 * a + 1] * e[1] + L.R[3 * a + 2] * e[2];
       double u, v, z;
-      if (!project(cam, g->origin, p, &u, &v, &z)) continue; /* behind the camera: the authors' proj_mask */
+      if (!project(cam, p, &u, &v, &z)) continue; /* behind the camera: the authors' proj_mask */
       mgs_sugar_sample *sm = t->s + kept++;
       memcpy(sm->p, p, sizeof p);
       sm->gauss = gi;

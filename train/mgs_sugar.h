@@ -139,6 +139,22 @@ typedef struct mgs_sugar_mesh_stats {
 mgs_status mgs_sugar_mesh(const mgs_gaussians *g, const mgs_camera *views, size_t n_views,
                           const mgs_sugar_mesh_options *o, mgs_mesh **out, mgs_sugar_mesh_stats *stats,
                           mgs_error *err);
+/* A run's SuGaR mesh beside its other exports (train/sugar_export.c): the model of
+ * `iteration` (-1: the latest) at the run's training cameras -> RUN/mesh/sugar.ply, and
+ * its signed distance as an OpenVDB level set RUN/mesh/sugar.vdb (grid `sdf`, meshToLevelSet
+ * of vdb/mgs_vdb_mesh_sdf.h; voxel = the mesh's bounding-box diagonal / resolution, band
+ * ±3 voxels). Existing outputs are refused unless `force`. */
+typedef struct mgs_sugar_export_report {
+  int iteration;
+  size_t views;
+  mgs_sugar_mesh_stats mesh;
+  double voxel_size;
+  size_t active_voxels;
+  double seconds;
+  char ply[4096], vdb[4096];
+} mgs_sugar_export_report;
+mgs_status mgs_sugar_export_run(const char *run_dir, int iteration, const mgs_sugar_mesh_options *o, int resolution,
+                                int force, mgs_sugar_export_report *rep, mgs_error *err);
 /* The crossings alone (points/normals malloc'd, 3 * *n each, local frame). */
 mgs_status mgs_sugar_level_points(const mgs_gaussians *g, const mgs_camera *views, size_t n_views,
                                   const mgs_sugar_mesh_options *o, double **points, double **normals, size_t *n,

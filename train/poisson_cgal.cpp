@@ -91,6 +91,13 @@ extern "C" mgs_status mgs_poisson_reconstruct(const double *p, const double *n, 
     Surface_3 surface(function, Sphere(inner, sphere_radius * sphere_radius), dichotomy / sphere_radius);
     CGAL::Surface_mesh_default_criteria_3<STr> criteria(o->angle, o->radius * spacing, o->distance * spacing);
     STr tr;
+    /* Seeds: the mesher finds a component only where a Voronoi edge of its triangulation
+       crosses it, and its own initial points are shot from the function's inner point, so
+       it can stop at the first small closed piece it meets (measured on the thin built-in
+       scene: a 92-triangle blob out of 53k points). Up to 2000 input points (evenly
+       strided; they lie on the surface within the reconstruction's error) seed every part. */
+    const size_t stride = m > 2000 ? m / 2000 : 1;
+    for (size_t i = 0; i < m; i += stride) tr.insert(pts[i].first);
     C2t3 c2t3(tr);
     CGAL::make_surface_mesh(c2t3, surface, criteria, CGAL::Manifold_with_boundary_tag());
     if (tr.number_of_vertices() == 0)

@@ -28,7 +28,8 @@ static void usage(FILE *f) {
     "      --max-views N      evaluate at most N views (evenly spaced)\n"
     "      --depth median|expected, --fuse-voxel F, --trunc F, --trunc-back F, --trunc-thin F, --min-weight W, --carve\n"
     "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
-    "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n");
+    "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n"
+    "  With RUN/mesh/sugar.ply (morsegs vdb RUN --sugar-mesh) its geometry is reported too (geometry.sugar).\n");
 }
 
 static double read_train_seconds(const char *run, int *iterations) {
@@ -204,6 +205,19 @@ int mgs_cmd_eval(int argc, char **argv) {
         table[used] = 0;
         fprintf(stderr, "morsegs eval: note: the depth-fused surface's geometry skipped (the fusion failed)\n");
       }
+      /* SuGaR's mesh when `morsegs vdb RUN --sugar-mesh` wrote one (geometry.sugar) */
+      char *sugar_mesh = mgs_path_join(run, "mesh/sugar.ply");
+      if (sugar_mesh && mgs_path_exists(sugar_mesh)) {
+        cJSON *sg = cJSON_CreateObject();
+        used = strlen(table);
+        if (mgs_eval_geometry_mesh(sugar_mesh, gt_mesh, sg, table + used, sizeof table - used) == 0)
+          cJSON_AddItemToObject(geo, "sugar", sg);
+        else {
+          cJSON_Delete(sg);
+          table[used] = 0;
+        }
+      }
+      free(sugar_mesh);
       cJSON_AddItemToObject(res, "geometry", geo);
     } else {
       cJSON_Delete(geo);

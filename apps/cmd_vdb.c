@@ -20,6 +20,7 @@
 #include "core/mgs_mesh.h"
 #include "core/mgs_ply.h"
 #include "vdb/mgs_vdb.h"
+#include "train/mgs_sugar.h"
 
 static void usage(FILE *f) {
   fprintf(f,
@@ -53,7 +54,12 @@ static void usage(FILE *f) {
           "  --mem-budget GB          refuse builds estimated above this (default 60%% of RAM)\n"
           "  --mesh OUT.ply|OUT.obj   also write the zero level set as a triangle mesh\n"
           "  --adaptivity A           mesh simplification in [0,1] (0)\n"
-          "  --force                  overwrite existing outputs\n");
+          "  --force                  overwrite existing outputs\n"
+          "  morsegs vdb RUN --sugar-mesh: SuGaR's mesh of the run (level crossings of its density along the\n"
+          "  training rays, CGAL Poisson, trimming, decimation) -> RUN/mesh/sugar.ply and its level set\n"
+          "  RUN/mesh/sugar.vdb (grid sdf, voxel = the mesh's diagonal / --resolution); with\n"
+          "  --sugar-level L (0.3), --sugar-points N per view (0: every pixel), --sugar-trim Q (0.1),\n"
+          "  --sugar-triangles N (200000), --iteration, --force\n");
 }
 
 static int parse_double(const char *s, double *v) {
@@ -84,6 +90,9 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"trunc-thin", required_argument, 0, 'K'},
       {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
       {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
+      {"sugar-mesh", no_argument, 0, 'g'},       {"sugar-level", required_argument, 0, 'l'},
+      {"sugar-points", required_argument, 0, 'p'}, {"sugar-triangles", required_argument, 0, 'q'},
+      {"sugar-trim", required_argument, 0, 'u'},
       {"help", no_argument, 0, 'H'},              {0, 0, 0, 0}};
   const char *out = NULL, *mesh_out = NULL;
   mgs_vdb_alpha_params ap;
@@ -94,6 +103,9 @@ int mgs_cmd_vdb(int argc, char **argv) {
   int force = 0, c, from_depth = 0, from_alpha = 0, no_alpha = 0;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
+  int sugar = 0;
+  mgs_sugar_mesh_options so;
+  mgs_sugar_mesh_options_default(&so);
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:", opts, NULL)) != -1) {
     switch (c) {
@@ -190,9 +202,30 @@ int mgs_cmd_vdb(int argc, char **argv) {
         }
         fo.thin_fp = v;
         break;
+      case 'g': sugar = 1; break;
+      case 'l': case 'p': case 'q': case 'u':
+        if (!parse_double(optarg, &v) || v < 0 || (c == 'l' && !(v > 0 && v < 1)) || (c == 'u' && v >= 1) ||
+            (c != 'l' && c != 'u' && (v > 1e9 || v != floor(v)))) {
+          fprintf(stderr, "morsegs vdb: '%s': %s\n", optarg,
+                  c == 'l' ? "--sugar-level must be in (0, 1)" : c == 'u' ? "--sugar-trim must be in [0, 1)"
+                                                              : "--sugar-points/--sugar-triangles need an integer >= 0");
+          return 2;
+        }
+        if (c == 'l') so.level = v;
+        else if (c == 'p') so.points_per_view = (int)v;
+        else if (c == 'q') so.max_triangles = (size_t)v;
+        else so.trim_quantile = v;
+        break;
       case 'H': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
+  }
+  if (sugar) {
+    if (optind != argc - 1 || out || !mgs_is_dir(argv[optind])) {
+      fprintf(stderr, "morsegs vdb: --sugar-mesh takes one RUN folder and writes RUN/mesh/sugar.{ply,vdb} (no -o)\n");
+      return 2;
+    }
+    return mgs_cmd_vdb_sugar(argv[optind], fo.iteration, &so, ap.resolution, force);
   }
   if (from_alpha && (from_depth || no_alpha)) {
     fprintf(stderr, "morsegs vdb: --from-alpha excludes --from-depth and --no-alpha\n");

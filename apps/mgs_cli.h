@@ -14,6 +14,9 @@ int mgs_cmd_train(int argc, char **argv);
 int mgs_cmd_render(int argc, char **argv);
 int mgs_cmd_eval(int argc, char **argv);
 int mgs_cmd_vdb(int argc, char **argv);
+/* morsegs vdb RUN --sugar-mesh (apps/cmd_vdb_sugar.c) */
+struct mgs_sugar_mesh_options;
+int mgs_cmd_vdb_sugar(const char *run, int iteration, const struct mgs_sugar_mesh_options *o, int resolution, int force);
 int mgs_cmd_persistence(int argc, char **argv);
 int mgs_cmd_bench(int argc, char **argv);
 int mgs_cmd_experiment(int argc, char **argv);

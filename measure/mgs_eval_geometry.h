@@ -22,4 +22,8 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
 typedef struct mgs_fusion_opts mgs_fusion_opts;
 int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, const char *gt_mesh_path,
                             void *cjson_object_out, char *table_out, size_t table_len);
+/* The same metrics for a mesh file (measure/eval_geometry_sugar.c: SuGaR's RUN/mesh/sugar.ply,
+ * eval's geometry.sugar), with the α-surface's samples and threshold. */
+int mgs_eval_geometry_mesh(const char *mesh_path, const char *gt_mesh_path, void *cjson_object_out, char *table_out,
+                           size_t table_len);
 #endif

@@ -12,6 +12,7 @@ PKGS=(
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
   netgen-doc gmsh-doc python3-open3d
+  libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
   chromium
 )
 missing=()

@@ -5,6 +5,7 @@
 #include <string.h>
 #include "train/mgs_config.h"
 #include "core/mgs_core.h"
+#include "train/mgs_sugar.h"
 
 #define NOT_DIST_MS_REASON "Mini-Splatting renders every training view for its global reinitialisation and simplification; the distributed trainer has no such pass"
 
@@ -195,6 +196,8 @@ void mgs_config_defaults(mgs_train_config *c) {
   }
 }
 
+#define NOT_DIST_SUGAR "its neighbour lists and samples are global; the distributed trainer has none yet"
+
 /* ---- presets: rows of values over the table ---- */
 typedef struct { const char *option, *value; } preset_value;
 static const struct {
@@ -207,6 +210,7 @@ static const struct {
   {MGS_PRESET_MORSE_I, {{"strategy", "adc"}, {"init", "levelset"}}},
   {MGS_PRESET_MORSE_FULL, {{"strategy", "morse"}, {"init", "levelset"}, {"topo-loss", "eliminate"}, {"normal-loss", "0.01"}}},
   {MGS_PRESET_TOPOLOGY_GS, {{"init", "lpvi"}, {"pers-loss", "10"}}},
+  {MGS_PRESET_SUGAR, {{"strategy", "sugar"}, {"iters", "15000"}, {"densify-until", "7000"}}},
 };
 
 static mgs_status apply_preset(mgs_train_config *c, mgs_error *err) {
@@ -391,6 +395,7 @@ mgs_status mgs_config_validate(const mgs_train_config *c, int ranks, mgs_error *
     }
     if (c->strategy == MGS_STRAT_MINISPLAT || c->strategy == MGS_STRAT_MINISPLAT_D)
       return mgs_error_set(err, MGS_ERR_ARG, "--strategy %s: not with --mpi on %d processes (%s)", mgs_config_enum_name(c, "strategy"), ranks, NOT_DIST_MS_REASON);
+    if (c->strategy == MGS_STRAT_SUGAR) return mgs_error_set(err, MGS_ERR_ARG, "--strategy sugar: not with --mpi on %d processes (%s)", ranks, NOT_DIST_SUGAR);
     if (c->strategy == MGS_STRAT_MORSE) return mgs_error_set(err, MGS_ERR_ARG, "--strategy morse: not with --mpi on %d processes (%s)", ranks, "the Morse analysis is global; the distributed trainer has none yet");
     if (c->init != MGS_INIT_SFM) return mgs_error_set(err, MGS_ERR_ARG, "--init %s: not with --mpi on %d processes (each rank initialises its block from the dataset's points)", mgs_config_enum_name(c, "init"), ranks);
   } else {
@@ -398,6 +403,14 @@ mgs_status mgs_config_validate(const mgs_train_config *c, int ranks, mgs_error *
       if ((t[i].flags & MGS_OPT_MPI_ONLY) && c->source[i] == MGS_CFG_TYPED && !c->mpi)
         return mgs_error_set(err, MGS_ERR_ARG, "--%s is read only by --mpi", t[i].name);
   }
+  /* SuGaR settings: read only by --strategy sugar; its milestones in order */
+  for (size_t i = 0; i < n && c->strategy != MGS_STRAT_SUGAR; i++)
+    if (t[i].group == MGS_GROUP_SUGAR && c->source[i] == MGS_CFG_TYPED)
+      return mgs_error_set(err, MGS_ERR_ARG, "--%s needs --strategy sugar (or --preset sugar; the strategy is '%s')",
+                           t[i].name, mgs_config_enum_name(c, "strategy"));
+  if (c->strategy == MGS_STRAT_SUGAR && c->sugar_prune_at < c->sugar_from)
+    return mgs_error_set(err, MGS_ERR_ARG, "--sugar-prune-at %d comes before --sugar-from %d", c->sugar_prune_at,
+                         c->sugar_from);
   /* MorseGS settings that nothing would read */
   mgs_morse_options mo;
   int morse_used = mgs_config_morse_options(c, &mo);
@@ -435,7 +448,7 @@ void mgs_config_usage(FILE *f) {
   static const char *titles[MGS_GROUP_COUNT] = {
     "run", "3DGS baseline (the reference's defaults)", "large scenes (docs/notes/scale.md)",
     "distributed: under mpirun -np K with --mpi", "MorseGS (lengths are fractions of the bounding-box diagonal)",
-    "Topology-GS"};
+    "Topology-GS", "SuGaR (--strategy sugar: from the 3DGS model at --sugar-from, docs/notes/sugar.md)"};
   fprintf(f, "usage: morsegs train DATA -o RUN [options]\n"
              "  DATA: NeRF-synthetic (transforms_train.json), nerfstudio (transforms.json) or COLMAP folder\n"
              "  --name V and --name=V are the same; (R) = recorded in RUN/cfg_args and kept by --resume\n");
@@ -580,6 +593,19 @@ int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options 
   o->until = c->pers_loss_schedule[1];
   o->every = c->pers_loss_schedule[2];
   return c->pers_loss > 0;
+}
+
+int mgs_config_sugar_options(const mgs_train_config *c, mgs_sugar_options *o) {
+  mgs_sugar_options_default(o);
+  o->from_iter = c->sugar_from;
+  o->prune_at = c->sugar_prune_at;
+  o->prune_alpha = c->sugar_prune_alpha;
+  o->entropy = c->sugar_entropy;
+  o->sdf_weight = c->sugar_sdf;
+  o->normal_weight = c->sugar_normal;
+  o->samples = c->sugar_samples;
+  o->knn_every = c->sugar_knn_every;
+  return c->strategy == MGS_STRAT_SUGAR;
 }
 
 int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o) {

@@ -53,8 +53,9 @@ static const mgs_option TABLE[] = {
    "COLMAP/nerfstudio: every Nth view is a test view", NULL},
   {"seed", "seed", MGS_OPT_U64, F(seed), "0", 0, 0, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
    "random seed (rank K of --mpi uses S + K)", NULL},
-  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none|mini-splatting|mini-splatting-d", NULL, MGS_GROUP_BASELINE, REC | MPI,
-   "density control: adc (the reference's), morse (MorseGS, below), none, mini-splatting(-d) (Fang & Wang 2024)", NULL},
+  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none|mini-splatting|mini-splatting-d|sugar", NULL, MGS_GROUP_BASELINE, REC | MPI,
+   "density control: adc (the reference's), morse (MorseGS, below), none, mini-splatting(-d) (Fang & Wang 2024), "
+   "sugar (SuGaR's coarse stage, below)", NULL},
   {"init", "init", MGS_OPT_ENUM, F(init), "sfm", 0, 0, "sfm|random|levelset|lpvi", NULL, MGS_GROUP_BASELINE, REC | MPI,
    "initial Gaussians: dataset points (random when it has none), random, MorseGS level sets, LPVI (Topology-GS)", NULL},
   {"random-points", "random_points", MGS_OPT_INT, F(random_points), "100000", 1, BIG, NULL, NULL, MGS_GROUP_BASELINE,
@@ -146,9 +147,10 @@ static const mgs_option TABLE[] = {
 
   /* ---- MorseGS (lengths are fractions of the bounding-box diagonal) ---- */
   {"preset", "preset", MGS_OPT_ENUM, F(preset), "none", 0, 0,
-   "none|baseline|morse-d|morse-r|morse-i|morse-full|topology-gs", NULL, MGS_GROUP_MORSE, REC | MPI,
+   "none|baseline|morse-d|morse-r|morse-i|morse-full|topology-gs|sugar", NULL, MGS_GROUP_MORSE, REC | MPI,
    "a row of settings: morse-d (--strategy morse), morse-r (--topo-loss), morse-i (--init levelset), morse-full "
-   "(all + --normal-loss 0.01), topology-gs (--init lpvi --pers-loss)", NULL},
+   "(all + --normal-loss 0.01), topology-gs (--init lpvi --pers-loss), sugar (--strategy sugar --iters 15000 "
+   "--densify-until 7000)", NULL},
   {"literal", "literal", MGS_OPT_BOOL, F(literal), "0", 0, 1, NULL, "1", MGS_GROUP_MORSE, REC,
    "every MorseGS rule in the seed's printed form (spawn, prune, L_topo)", NOT_DIST},
   {"spawn", "morse_spawn", MGS_OPT_ENUM, F(spawn), "auto", 0, 0, "auto|gaps|literal|none", NULL, MGS_GROUP_MORSE, REC,
@@ -213,6 +215,24 @@ static const mgs_option TABLE[] = {
    "K0,K1,K2: bars per dimension", NOT_DIST},
   {"pers-loss-schedule", "pers_loss_schedule", MGS_OPT_INT3, F(pers_loss_schedule), "1500,15000,200", 0, 1e8, NULL,
    NULL, MGS_GROUP_TOPOGS, REC, "FROM,UNTIL,EVERY", NOT_DIST},
+
+  /* ---- SuGaR's coarse stage (--strategy sugar; docs/notes/sugar.md) ---- */
+  {"sugar-from", "sugar_from", MGS_OPT_INT, F(sugar_from), "7000", 0, BIG, NULL, NULL, MGS_GROUP_SUGAR, REC,
+   "the 3DGS model the stage starts from: opacity entropy after this iteration", NOT_DIST},
+  {"sugar-prune-at", "sugar_prune_at", MGS_OPT_INT, F(sugar_prune_at), "9000", 0, BIG, NULL, NULL, MGS_GROUP_SUGAR,
+   REC, "prune alpha < --sugar-prune-alpha here; entropy until, SDF and normal losses after", NOT_DIST},
+  {"sugar-prune-alpha", "sugar_prune_alpha", MGS_OPT_DOUBLE, F(sugar_prune_alpha), "0.5", 1e-6, 0.999999, NULL, NULL,
+   MGS_GROUP_SUGAR, REC, "opacity below which the prune removes a Gaussian", NOT_DIST},
+  {"sugar-entropy", "sugar_entropy", MGS_OPT_DOUBLE, F(sugar_entropy), "0.1", 0, 1e6, NULL, NULL, MGS_GROUP_SUGAR, REC,
+   "weight of the opacity entropy", NOT_DIST},
+  {"sugar-sdf", "sugar_sdf", MGS_OPT_DOUBLE, F(sugar_sdf), "0.2", 0, 1e6, NULL, NULL, MGS_GROUP_SUGAR, REC,
+   "weight of the SDF loss (the authors' estimation_factor)", NOT_DIST},
+  {"sugar-normal", "sugar_normal", MGS_OPT_DOUBLE, F(sugar_normal), "0.2", 0, 1e6, NULL, NULL, MGS_GROUP_SUGAR, REC,
+   "weight of the normal loss (normal_factor)", NOT_DIST},
+  {"sugar-samples", "sugar_samples", MGS_OPT_INT, F(sugar_samples), "20000", 1, 1e8, NULL, NULL, MGS_GROUP_SUGAR, REC,
+   "SDF samples per iteration (the authors 1000000; fewer on the CPU)", NOT_DIST},
+  {"sugar-knn-every", "sugar_knn_every", MGS_OPT_INT, F(sugar_knn_every), "500", 1, BIG, NULL, NULL,
+   MGS_GROUP_SUGAR, REC, "16 nearest neighbours refreshed every N iterations", NOT_DIST},
 };
 
 const mgs_option *mgs_config_options(size_t *count) {

@@ -35,12 +35,12 @@ extern "C" {
 
 /* Enumerations the table names (values in the order of the names in config_table.h). */
 typedef enum { MGS_BG_AUTO, MGS_BG_WHITE, MGS_BG_BLACK } mgs_cfg_background;
-typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_MINISPLAT, MGS_STRAT_MINISPLAT_D } mgs_cfg_strategy;
+typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_MINISPLAT, MGS_STRAT_MINISPLAT_D, MGS_STRAT_SUGAR } mgs_cfg_strategy;
 typedef enum { MGS_INIT_SFM, MGS_INIT_RANDOM, MGS_INIT_LEVELSET, MGS_INIT_LPVI } mgs_cfg_init;
 typedef enum { MGS_AUTO_OFF_ON_AUTO, MGS_AUTO_OFF_ON_ON, MGS_AUTO_OFF_ON_OFF } mgs_cfg_tristate; /* auto|on|off */
 typedef enum { MGS_ADAM_AUTO, MGS_ADAM_SPARSE, MGS_ADAM_DENSE } mgs_cfg_adam;
 typedef enum { MGS_PRESET_NONE, MGS_PRESET_BASELINE, MGS_PRESET_MORSE_D, MGS_PRESET_MORSE_R, MGS_PRESET_MORSE_I,
-               MGS_PRESET_MORSE_FULL, MGS_PRESET_TOPOLOGY_GS } mgs_cfg_preset;
+               MGS_PRESET_MORSE_FULL, MGS_PRESET_TOPOLOGY_GS, MGS_PRESET_SUGAR } mgs_cfg_preset;
 /* spawn/prune: auto = the MorseGS rule under --strategy morse (its literal form with
  * --literal), none otherwise */
 typedef enum { MGS_SPAWN_AUTO, MGS_SPAWN_GAPS, MGS_SPAWN_LITERAL, MGS_SPAWN_NONE } mgs_cfg_spawn;
@@ -96,6 +96,9 @@ typedef struct mgs_train_config {
   int pers_loss_form;
   double pers_loss_downsample;
   int pers_loss_k[3], pers_loss_schedule[3];
+  /* SuGaR (--strategy sugar) */
+  int sugar_from, sugar_prune_at, sugar_samples, sugar_knn_every;
+  double sugar_prune_alpha, sugar_entropy, sugar_sdf, sugar_normal;
   /* where each option's value came from (mgs_cfg_source, by option index) */
   unsigned char source[128];
 } mgs_train_config;
@@ -104,7 +107,7 @@ typedef enum { MGS_CFG_DEFAULT, MGS_CFG_PRESET, MGS_CFG_RECORD, MGS_CFG_TYPED } 
 
 /* Option groups: the sections of --help. */
 typedef enum { MGS_GROUP_RUN, MGS_GROUP_BASELINE, MGS_GROUP_SCALE, MGS_GROUP_DIST, MGS_GROUP_MORSE, MGS_GROUP_TOPOGS,
-               MGS_GROUP_COUNT } mgs_opt_group;
+               MGS_GROUP_SUGAR, MGS_GROUP_COUNT } mgs_opt_group;
 
 typedef enum { MGS_OPT_INT, MGS_OPT_U64, MGS_OPT_DOUBLE, MGS_OPT_BOOL, MGS_OPT_ENUM, MGS_OPT_STRING, MGS_OPT_INT3,
                MGS_OPT_DIMS } mgs_opt_type;
@@ -185,6 +188,9 @@ int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_option
 void mgs_config_scheduled(const mgs_train_config *c, mgs_train_config *out);
 /* A reference milestone (Mini-Splatting's 5000, the normal loss' 3000) under the scale. */
 int mgs_config_scale_iteration(const mgs_train_config *c, int iteration);
+/* SuGaR's coarse stage; returns 1 if it is on (--strategy sugar). */
+struct mgs_sugar_options;
+int mgs_config_sugar_options(const mgs_train_config *c, struct mgs_sugar_options *o);
 /* Names of enum values (for messages and records). */
 const char *mgs_config_enum_name(const mgs_train_config *c, const char *option);
 

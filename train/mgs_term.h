@@ -34,6 +34,9 @@ typedef struct mgs_term_step {
   size_t view_index;            /* its index among the training views */
   const float *color;           /* rendered image, width x height x 3, row-major */
   const float *gt;              /* ground truth, same layout */
+  const float *alpha;           /* the render's 1 - T, width x height */
+  const float *depth;           /* the render's sum_i w_i z_i (not divided by alpha) */
+  const int *radii;             /* per Gaussian screen radius in px, 0 when culled */
   int width, height;
   int active_sh;
   double extent;                /* scene radius (the reference's cameras_extent) */

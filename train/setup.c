@@ -7,6 +7,7 @@
 #include "train/mgs_init_levelset.h"
 #include "train/mgs_strategy.h"
 #include "train/mgs_term.h"
+#include "train/mgs_sugar.h"
 #include "core/mgs_core.h"
 
 /* The normal loss reads the Morse analysis' SDF when one runs (none before the first). */
@@ -123,6 +124,9 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
     mso.adc = o->adc; /* the trainer's (scaled) ADC settings */
     if ((st = mgs_strategy_minisplat_create(&mso, &strat, err))) goto fail;
   }
+  mgs_sugar_options so;
+  int use_sugar = mgs_config_sugar_options(c, &so);
+  if (use_sugar && (st = mgs_strategy_sugar_create(&o->adc, &so, &strat, err))) goto fail;
   st = mgs_trainer_create(ds, o, g0, strat, &out->trainer, err); /* owns g0 and strat from here */
   g0 = NULL;
   if (st) goto fail;
@@ -141,6 +145,10 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
     mgs_term *tt = NULL;
     if ((st = mgs_term_2dgs_create(&to, &tt, err))) goto fail;
     if (tt && (st = mgs_trainer_add_term(out->trainer, tt, err))) goto fail;
+  }
+  if (use_sugar) {
+    mgs_term *sg = NULL;
+    if ((st = mgs_term_sugar_create(&so, &sg, err)) || (st = mgs_trainer_add_term(out->trainer, sg, err))) goto fail;
   }
   mgs_normal_options no;
   if (mgs_config_normal_options(c, &no)) {

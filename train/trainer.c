@@ -283,6 +283,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     }
     ts.iteration = it; ts.iterations = o->iterations; ts.model = t->g; ts.view = v;
     ts.view_index = t->perm[t->perm_pos - 1]; ts.color = ro.color; ts.gt = gt;
+    ts.alpha = ro.alpha; ts.depth = ro.depth; ts.radii = ro.radii;
     ts.width = ro.width; ts.height = ro.height; ts.active_sh = t->active_sh; ts.extent = ext;
     ts.rng = &t->rng; ts.dl_dcolor = t->dl; ts.raster = t->raster;
   }

@@ -55,6 +55,7 @@ typedef struct pm_ctx {
   int n_src;
   float *plane; /* 4 per pixel: n (camera frame, unit, facing the camera), d: n.X + d = 0 */
   float *cost;
+  uint8_t *flat; /* the reference window has (almost) no variance: no hypothesis can match */
   float wspatial[64 * 64]; /* per window offset, exp(-dist / (2 sigma_s^2)) as the authors */
   float wcolor[PM_LUT];
   int radius, step, iter, colour;
@@ -209,6 +210,29 @@ static float pm_ncc(const pm_ctx *c, const pm_src *s, const float *pl, int x, in
   return (float)(cst < 0 ? 0 : cst > PM_COST_MAX ? PM_COST_MAX : cst);
 }
 
+/* The reference window's weighted variance is below the NCC's minimum: every hypothesis
+ * costs the maximum there (plain background), so the pixel is skipped. */
+static int pm_ref_flat(const pm_ctx *c, int x, int y) {
+  const int W = c->W, Hh = c->H, r = c->radius, st = c->step, side = 2 * r + 1;
+  const float centre = c->ref[(size_t)y * (size_t)W + (size_t)x];
+  double sw = 0, sr = 0, srr = 0;
+  for (int j = -r; j <= r; j += st) {
+    int yy = y + j;
+    if (yy < 0 || yy >= Hh) continue;
+    for (int i = -r; i <= r; i += st) {
+      int xx = x + i;
+      if (xx < 0 || xx >= W) continue;
+      float rp = c->ref[(size_t)yy * (size_t)W + (size_t)xx];
+      int li = (int)(fabsf(rp - centre) * 4.0f);
+      float wgt = c->wspatial[(j + r) * side + (i + r)] * (li < PM_LUT ? c->wcolor[li] : 0.0f);
+      sw += wgt; sr += wgt * rp; srr += wgt * rp * rp;
+    }
+  }
+  if (!(sw > 0)) return 1;
+  sr /= sw; srr /= sw;
+  return srr - sr * sr < 1e-5;
+}
+
 /* Multi-view cost: the mean of the best top_k view costs below the maximum. */
 static float pm_cost(const pm_ctx *c, const float *pl, int x, int y) {
   float v[PM_MAX_SRC];
@@ -260,7 +284,8 @@ static void pm_init_rows(void *vctx, size_t b, size_t e) {
       }
       if (!have_n) pm_random_normal(c, x, (int)y, &s, pl);
       pm_set_d(c, pl, x, (int)y, z);
-      c->cost[p] = pm_cost(c, pl, x, (int)y);
+      c->flat[p] = pm_ref_flat(c, x, (int)y);
+      c->cost[p] = c->flat[p] ? PM_COST_MAX : pm_cost(c, pl, x, (int)y);
     }
 }
 
@@ -309,6 +334,7 @@ static void pm_groups(pm_ctx *c) {
 
 static void pm_update(const pm_ctx *c, int x, int y) {
   size_t p = (size_t)y * (size_t)c->W + (size_t)x;
+  if (c->flat[p]) return;
   float *pl = c->plane + 4 * p;
   float cost = c->cost[p];
   for (int g = 0; g < 8; g++) {
@@ -408,9 +434,10 @@ mgs_status mgs_pm_run(const mgs_pm_view *ref, const mgs_pm_view *src, int n_src,
   size_t np = (size_t)c->W * (size_t)c->H;
   c->plane = malloc(4 * np * sizeof(float));
   c->cost = malloc(np * sizeof(float));
+  c->flat = malloc(np);
   float *ncam = init_normal ? malloc(3 * np * sizeof(float)) : NULL;
-  if (!c->plane || !c->cost || (init_normal && !ncam)) {
-    free(c->plane); free(c->cost); free(ncam); free(c);
+  if (!c->plane || !c->cost || !c->flat || (init_normal && !ncam)) {
+    free(c->plane); free(c->cost); free(c->flat); free(ncam); free(c);
     return mgs_error_set(err, MGS_ERR_NOMEM, "patch match: out of memory (%dx%d)", rc->width, rc->height);
   }
   if (ncam) /* world -> reference camera frame: R_w2c n */
@@ -441,6 +468,7 @@ mgs_status mgs_pm_run(const mgs_pm_view *ref, const mgs_pm_view *src, int n_src,
   }
   free(c->plane);
   free(c->cost);
+  free(c->flat);
   free(c);
   return MGS_OK;
 }

@@ -33,7 +33,7 @@ extern "C" {
 
 /* Enumerations the table names (values in the order of the names in config_table.h). */
 typedef enum { MGS_BG_AUTO, MGS_BG_WHITE, MGS_BG_BLACK } mgs_cfg_background;
-typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE } mgs_cfg_strategy;
+typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_GAUSSIANPRO } mgs_cfg_strategy;
 typedef enum { MGS_INIT_SFM, MGS_INIT_RANDOM, MGS_INIT_LEVELSET, MGS_INIT_LPVI } mgs_cfg_init;
 typedef enum { MGS_AUTO_OFF_ON_AUTO, MGS_AUTO_OFF_ON_ON, MGS_AUTO_OFF_ON_OFF } mgs_cfg_tristate; /* auto|on|off */
 typedef enum { MGS_ADAM_AUTO, MGS_ADAM_SPARSE, MGS_ADAM_DENSE } mgs_cfg_adam;
@@ -89,6 +89,9 @@ typedef struct mgs_train_config {
   int pers_loss_form;
   double pers_loss_downsample;
   int pers_loss_k[3], pers_loss_schedule[3];
+  /* GaussianPro (--strategy gaussianpro) */
+  int gpro_schedule[3], gpro_patch, gpro_pm_iters, gpro_neighbors;
+  double gpro_error_max, gpro_error_min;
   /* where each option's value came from (mgs_cfg_source, by option index) */
   unsigned char source[128];
 } mgs_train_config;

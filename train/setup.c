@@ -5,6 +5,7 @@
 #include <string.h>
 #include "train/mgs_config.h"
 #include "train/mgs_init_levelset.h"
+#include "train/mgs_gaussianpro.h"
 #include "train/mgs_strategy.h"
 #include "train/mgs_term.h"
 #include "core/mgs_core.h"
@@ -117,6 +118,17 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
     goto fail;
   }
   if (c->strategy == MGS_STRAT_MORSE && (st = mgs_strategy_morse_create(&o->adc, out->morse, &strat, err))) goto fail;
+  if (c->strategy == MGS_STRAT_GAUSSIANPRO) {
+    mgs_gpro_options go;
+    mgs_gpro_options_default(&go);
+    go.from = c->gpro_schedule[0]; go.until = c->gpro_schedule[1]; go.every = c->gpro_schedule[2];
+    go.patch_size = c->gpro_patch; go.pm_iterations = c->gpro_pm_iters; go.neighbors = c->gpro_neighbors;
+    go.error_max = c->gpro_error_max; go.error_min = c->gpro_error_min;
+    go.seed = c->seed;
+    if ((st = mgs_strategy_gaussianpro_create(&o->adc, &go, ds->views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TRAIN],
+                                              ds->extent, &strat, err)))
+      goto fail;
+  }
   st = mgs_trainer_create(ds, o, g0, strat, &out->trainer, err); /* owns g0 and strat from here */
   g0 = NULL;
   if (st) goto fail;

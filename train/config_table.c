@@ -198,7 +198,7 @@ static const mgs_option TABLE[] = {
    NULL, MGS_GROUP_TOPOGS, REC, "FROM,UNTIL,EVERY", NOT_DIST},
 
   /* ---- GaussianPro (--strategy gaussianpro; the authors' demo values) ---- */
-  {"gpro-schedule", "gpro_schedule", MGS_OPT_INT3, F(gpro_schedule), "1000,6000,50", 0, 1e8, NULL, NULL,
+  {"gpro-schedule", "gpro_schedule", MGS_OPT_INT3, F(gpro_schedule), "1000,6000,50", 1, 1e8, NULL, NULL,
    MGS_GROUP_BASELINE, REC, "GaussianPro: FROM,UNTIL,EVERY of the propagation steps (one view each)", NOT_DIST},
   {"gpro-patch", "gpro_patch", MGS_OPT_INT, F(gpro_patch), "20", 3, 62, NULL, NULL, MGS_GROUP_BASELINE, REC,
    "GaussianPro: patch-match window side in px", NOT_DIST},

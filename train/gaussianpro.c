@@ -48,6 +48,8 @@ struct mgs_gpro {
   const mgs_view *views;
   size_t n;
   float **depth; /* per view: its propagated depth (0 = none), NULL until matched */
+  uint8_t *checked; /* per view: 1 when matched as the reference (depth then 0 where fewer
+                       than 2 neighbours agree), 0 when only as a neighbour */
   mgs_raster *raster;
   float dmin, dmax;
 };
@@ -61,8 +63,9 @@ mgs_status mgs_gpro_create(const mgs_gpro_options *o, const mgs_view *views, siz
                          o->every, o->patch_size, o->neighbors, o->stride);
   mgs_gpro *p = calloc(1, sizeof *p);
   if (p) p->depth = calloc(n_views ? n_views : 1, sizeof *p->depth);
-  if (p && p->depth) p->raster = mgs_raster_create();
-  if (!p || !p->depth || !p->raster) {
+  if (p) p->checked = calloc(n_views ? n_views : 1, 1);
+  if (p && p->depth && p->checked) p->raster = mgs_raster_create();
+  if (!p || !p->depth || !p->checked || !p->raster) {
     mgs_gpro_destroy(p);
     return mgs_error_set(err, MGS_ERR_NOMEM, "gaussianpro: out of memory");
   }
@@ -81,11 +84,16 @@ void mgs_gpro_destroy(mgs_gpro *p) {
   if (p->depth)
     for (size_t i = 0; i < p->n; i++) free(p->depth[i]);
   free(p->depth);
+  free(p->checked);
   mgs_raster_destroy(p->raster);
   free(p);
 }
 
 const float *mgs_gpro_cached_depth(const mgs_gpro *p, size_t view) { return view < p->n ? p->depth[view] : NULL; }
+
+const float *mgs_gpro_checked_depth(const mgs_gpro *p, size_t view) {
+  return view < p->n && p->checked[view] ? p->depth[view] : NULL;
+}
 
 /* ---- per-view inputs ------------------------------------------------------------------- */
 
@@ -293,10 +301,13 @@ mgs_status mgs_gpro_propagate(mgs_gpro *p, mgs_gaussians *g, mgs_adam *a, size_t
       r->accepted += (size_t)ok;
     }
     if (r->accepted > (size_t)p->o.min_pixels) st = add_gaussians(p, g, a, view, depth, normal, mask, &r->added, err);
+    for (size_t k = 0; k < np; k++)
+      if (cnt[k] < 2) depth[k] = 0; /* kept checked, as the authors' (their 300 = none) */
   }
   if (st == MGS_OK) { /* keep this view's depth for the views that take it as a neighbour */
     free(p->depth[view]);
     p->depth[view] = depth;
+    p->checked[view] = 1;
     depth = NULL;
   }
   view_maps_free(&m);
@@ -312,7 +323,7 @@ mgs_status mgs_gpro_save(const mgs_gpro *p, FILE *f, mgs_error *err) {
   uint32_t hdr[2] = {GPRO_STATE_TAG, (uint32_t)p->n};
   int ok = fwrite(hdr, sizeof hdr, 1, f) == 1;
   for (size_t i = 0; i < p->n && ok; i++) {
-    uint8_t has = p->depth[i] != NULL;
+    uint8_t has = p->depth[i] ? (uint8_t)(1 + p->checked[i]) : 0;
     ok = fwrite(&has, 1, 1, f) == 1;
     size_t np = (size_t)p->views[i].cam.width * (size_t)p->views[i].cam.height;
     if (ok && has) ok = fwrite(p->depth[i], sizeof(float), np, f) == np;
@@ -328,9 +339,10 @@ mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err) {
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state for %u views, the dataset has %zu", hdr[1], p->n);
   for (size_t i = 0; i < p->n; i++) {
     uint8_t has;
-    if (fread(&has, 1, 1, f) != 1 || has > 1) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
+    if (fread(&has, 1, 1, f) != 1 || has > 2) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
     free(p->depth[i]);
     p->depth[i] = NULL;
+    p->checked[i] = has == 2;
     if (!has) continue;
     size_t np = (size_t)p->views[i].cam.width * (size_t)p->views[i].cam.height;
     p->depth[i] = malloc(np * sizeof(float));

@@ -91,7 +91,7 @@ typedef struct mgs_train_config {
   int pers_loss_k[3], pers_loss_schedule[3];
   /* GaussianPro (--strategy gaussianpro) */
   int gpro_schedule[3], gpro_patch, gpro_pm_iters, gpro_neighbors;
-  double gpro_error_max, gpro_error_min;
+  double gpro_error_max, gpro_error_min, gpro_planar;
   /* where each option's value came from (mgs_cfg_source, by option index) */
   unsigned char source[128];
 } mgs_train_config;

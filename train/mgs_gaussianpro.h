@@ -8,6 +8,8 @@
  *                                       pixel where the render's depth disagrees
  *   mgs_strategy_gaussianpro_create ... the reference ADC plus that step every `every`
  *                                       iterations in (from, until), views in turn
+ *   mgs_term_planar_create ............ the planar loss (its depth half) against the
+ *                                       checked propagated depths
  *
  * The propagated depth of every view matched so far is kept (as the authors cache it on
  * the camera) and reused as a neighbour's depth in the consistency check; it is part of
@@ -19,7 +21,9 @@
 #include "core/mgs_error.h"
 #include "core/mgs_dataset.h"
 #include "core/mgs_gaussians.h"
+#include "render/mgs_raster.h"
 #include "train/mgs_train.h"
+#include "train/mgs_term.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -63,15 +67,30 @@ typedef struct mgs_gpro_report {
  * optimizer); their rows are the last r->added of g. */
 mgs_status mgs_gpro_propagate(mgs_gpro *p, mgs_gaussians *g, mgs_adam *a, size_t view, double progress,
                               mgs_gpro_report *r, mgs_error *err);
-/* The propagated depth kept for a view (its camera's size), NULL if none yet. */
+/* The propagated depth kept for a view (its camera's size, 0 = none), NULL if none yet;
+ * the checked one only when the view was matched as the reference (then 0 where fewer
+ * than 2 neighbours agree): what the planar loss compares the render with. */
 const float *mgs_gpro_cached_depth(const mgs_gpro *p, size_t view);
+const float *mgs_gpro_checked_depth(const mgs_gpro *p, size_t view);
 
 mgs_status mgs_gpro_save(const mgs_gpro *p, FILE *f, mgs_error *err);
 mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err);
 
+/* The planar loss (train/term_planar.c), model gradients from iteration from + 1 on the
+ * views with a checked propagated depth of `pro` (borrowed: the strategy's). */
+mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, int from, mgs_term **out, mgs_error *err);
+/* Its value for one view: weight x mean |sum w z - target| over target > 0, rendered with
+ * r; its gradient added into grad (NULL: value only). The buffers are the caller's
+ * scratch (grown as needed, *cap floats of depth). */
+mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const float *target, double weight,
+                           float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
+                           mgs_error *err);
+
 /* The ADC of `adc` plus propagation (views borrowed from the dataset's training split). */
 mgs_status mgs_strategy_gaussianpro_create(const mgs_adc_options *adc, const mgs_gpro_options *o, const mgs_view *views,
                                            size_t n_views, double extent, struct mgs_strategy **out, mgs_error *err);
+/* The propagation of a gaussianpro strategy (NULL for another strategy). */
+const mgs_gpro *mgs_strategy_gaussianpro_pro(const struct mgs_strategy *s);
 
 #ifdef __cplusplus
 }

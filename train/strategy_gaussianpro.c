@@ -123,3 +123,7 @@ mgs_status mgs_strategy_gaussianpro_create(const mgs_adc_options *adc, const mgs
   *out = s;
   return MGS_OK;
 }
+
+const mgs_gpro *mgs_strategy_gaussianpro_pro(const mgs_strategy *s) {
+  return s && s->ops == &gpro_ops ? ((const gpro_strat *)s->self)->pro : NULL;
+}

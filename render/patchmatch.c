@@ -136,10 +136,10 @@ static void pm_perturb_normal(const pm_ctx *c, int x, int y, const float n[3], f
 static float pm_bilinear(const float *img, int w, int h, float u, float v) {
   /* u, v continuous with pixel centres at +0.5; clamped at the border (texture clamp) */
   float fx = u - 0.5f, fy = v - 0.5f;
-  if (fx < 0) fx = 0;
-  if (fy < 0) fy = 0;
-  if (fx > (float)(w - 1)) fx = (float)(w - 1);
-  if (fy > (float)(h - 1)) fy = (float)(h - 1);
+  if (!(fx >= 0)) fx = 0; /* also NaN (a near-degenerate homography) */
+  if (!(fy >= 0)) fy = 0;
+  if (!(fx <= (float)(w - 1))) fx = (float)(w - 1);
+  if (!(fy <= (float)(h - 1))) fy = (float)(h - 1);
   int x0 = (int)fx, y0 = (int)fy;
   int x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
   float ax = fx - (float)x0, ay = fy - (float)y0;
@@ -197,7 +197,8 @@ static float pm_ncc(const pm_ctx *c, const pm_src *s, const float *pl, int x, in
       float z = Hm[6] * u + Hm[7] * v + Hm[8];
       if (!(z > 1e-8f)) return PM_COST_MAX;
       float sp = pm_bilinear(s->gray, s->w, s->h, (Hm[0] * u + Hm[1] * v + Hm[2]) / z, (Hm[3] * u + Hm[4] * v + Hm[5]) / z);
-      int li = (int)(fabsf(rp - centre) * 4.0f);
+      float q = fabsf(rp - centre) * 4.0f;
+      int li = q < (float)PM_LUT ? (int)q : PM_LUT;
       float wgt = c->wspatial[(j + r) * side + (i + r)] * (li < PM_LUT ? c->wcolor[li] : 0.0f);
       sw += wgt; sr += wgt * rp; srr += wgt * rp * rp; ss += wgt * sp; sss += wgt * sp * sp; srs += wgt * rp * sp;
     }
@@ -223,7 +224,8 @@ static int pm_ref_flat(const pm_ctx *c, int x, int y) {
       int xx = x + i;
       if (xx < 0 || xx >= W) continue;
       float rp = c->ref[(size_t)yy * (size_t)W + (size_t)xx];
-      int li = (int)(fabsf(rp - centre) * 4.0f);
+      float q = fabsf(rp - centre) * 4.0f;
+      int li = q < (float)PM_LUT ? (int)q : PM_LUT;
       float wgt = c->wspatial[(j + r) * side + (i + r)] * (li < PM_LUT ? c->wcolor[li] : 0.0f);
       sw += wgt; sr += wgt * rp; srr += wgt * rp * rp;
     }

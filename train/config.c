@@ -397,6 +397,7 @@ mgs_status mgs_config_validate(const mgs_train_config *c, int ranks, mgs_error *
       return mgs_error_set(err, MGS_ERR_ARG, "--strategy %s: not with --mpi on %d processes (%s)", mgs_config_enum_name(c, "strategy"), ranks, NOT_DIST_MS_REASON);
     if (c->strategy == MGS_STRAT_SUGAR) return mgs_error_set(err, MGS_ERR_ARG, "--strategy sugar: not with --mpi on %d processes (%s)", ranks, NOT_DIST_SUGAR);
     if (c->strategy == MGS_STRAT_MORSE) return mgs_error_set(err, MGS_ERR_ARG, "--strategy morse: not with --mpi on %d processes (%s)", ranks, "the Morse analysis is global; the distributed trainer has none yet");
+    if (c->strategy == MGS_STRAT_GAUSSIANPRO) return mgs_error_set(err, MGS_ERR_ARG, "--strategy gaussianpro: not with --mpi on %d processes (%s)", ranks, "its patch matching reads other views' images; the distributed trainer has none yet");
     if (c->init != MGS_INIT_SFM) return mgs_error_set(err, MGS_ERR_ARG, "--init %s: not with --mpi on %d processes (each rank initialises its block from the dataset's points)", mgs_config_enum_name(c, "init"), ranks);
   } else {
     for (size_t i = 0; i < n; i++)

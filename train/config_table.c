@@ -53,9 +53,9 @@ static const mgs_option TABLE[] = {
    "COLMAP/nerfstudio: every Nth view is a test view", NULL},
   {"seed", "seed", MGS_OPT_U64, F(seed), "0", 0, 0, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
    "random seed (rank K of --mpi uses S + K)", NULL},
-  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none|mini-splatting|mini-splatting-d|sugar", NULL, MGS_GROUP_BASELINE, REC | MPI,
+  {"strategy", "strategy", MGS_OPT_ENUM, F(strategy), "adc", 0, 0, "adc|morse|none|mini-splatting|mini-splatting-d|sugar|gaussianpro", NULL, MGS_GROUP_BASELINE, REC | MPI,
    "density control: adc (the reference's), morse (MorseGS, below), none, mini-splatting(-d) (Fang & Wang 2024), "
-   "sugar (SuGaR's coarse stage, below)", NULL},
+   "sugar (SuGaR's coarse stage, below), gaussianpro (ADC plus GaussianPro's propagation, --gpro-*)", NULL},
   {"init", "init", MGS_OPT_ENUM, F(init), "sfm", 0, 0, "sfm|random|levelset|lpvi", NULL, MGS_GROUP_BASELINE, REC | MPI,
    "initial Gaussians: dataset points (random when it has none), random, MorseGS level sets, LPVI (Topology-GS)", NULL},
   {"random-points", "random_points", MGS_OPT_INT, F(random_points), "100000", 1, BIG, NULL, NULL, MGS_GROUP_BASELINE,
@@ -233,6 +233,21 @@ static const mgs_option TABLE[] = {
    "SDF samples per iteration (the authors 1000000; fewer on the CPU)", NOT_DIST},
   {"sugar-knn-every", "sugar_knn_every", MGS_OPT_INT, F(sugar_knn_every), "500", 1, BIG, NULL, NULL,
    MGS_GROUP_SUGAR, REC, "16 nearest neighbours refreshed every N iterations", NOT_DIST},
+  /* ---- GaussianPro (--strategy gaussianpro; the authors' demo values) ---- */
+  {"gpro-schedule", "gpro_schedule", MGS_OPT_INT3, F(gpro_schedule), "1000,6000,50", 1, 1e8, NULL, NULL,
+   MGS_GROUP_BASELINE, REC, "GaussianPro: FROM,UNTIL,EVERY of the propagation steps (one view each)", NOT_DIST},
+  {"gpro-patch", "gpro_patch", MGS_OPT_INT, F(gpro_patch), "20", 3, 62, NULL, NULL, MGS_GROUP_BASELINE, REC,
+   "GaussianPro: patch-match window side in px", NOT_DIST},
+  {"gpro-pm-iters", "gpro_pm_iters", MGS_OPT_INT, F(gpro_pm_iters), "6", 0, 100, NULL, NULL, MGS_GROUP_BASELINE, REC,
+   "GaussianPro: checkerboard propagation sweeps", NOT_DIST},
+  {"gpro-neighbors", "gpro_neighbors", MGS_OPT_INT, F(gpro_neighbors), "4", 2, 32, NULL, NULL, MGS_GROUP_BASELINE,
+   REC, "GaussianPro: views a view is matched against (chosen by overlap)", NOT_DIST},
+  {"gpro-error-max", "gpro_error_max", MGS_OPT_DOUBLE, F(gpro_error_max), "1.0", 0, 1e6, NULL, NULL,
+   MGS_GROUP_BASELINE, REC, "GaussianPro: relative depth error for new Gaussians at FROM ...", NOT_DIST},
+  {"gpro-error-min", "gpro_error_min", MGS_OPT_DOUBLE, F(gpro_error_min), "0.8", 0, 1e6, NULL, NULL,
+   MGS_GROUP_BASELINE, REC, "... falling linearly to this at UNTIL", NOT_DIST},
+  {"gpro-planar", "gpro_planar", MGS_OPT_DOUBLE, F(gpro_planar), "0.001", 0, 1e6, NULL, NULL, MGS_GROUP_BASELINE, REC,
+   "GaussianPro: weight of the planar loss on depth after FROM (0 = off; docs/notes/gaussianpro.md)", NOT_DIST},
 };
 
 const mgs_option *mgs_config_options(size_t *count) {

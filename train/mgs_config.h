@@ -35,7 +35,8 @@ extern "C" {
 
 /* Enumerations the table names (values in the order of the names in config_table.h). */
 typedef enum { MGS_BG_AUTO, MGS_BG_WHITE, MGS_BG_BLACK } mgs_cfg_background;
-typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_MINISPLAT, MGS_STRAT_MINISPLAT_D, MGS_STRAT_SUGAR } mgs_cfg_strategy;
+typedef enum { MGS_STRAT_ADC, MGS_STRAT_MORSE, MGS_STRAT_NONE, MGS_STRAT_MINISPLAT, MGS_STRAT_MINISPLAT_D, MGS_STRAT_SUGAR,
+               MGS_STRAT_GAUSSIANPRO } mgs_cfg_strategy;
 typedef enum { MGS_INIT_SFM, MGS_INIT_RANDOM, MGS_INIT_LEVELSET, MGS_INIT_LPVI } mgs_cfg_init;
 typedef enum { MGS_AUTO_OFF_ON_AUTO, MGS_AUTO_OFF_ON_ON, MGS_AUTO_OFF_ON_OFF } mgs_cfg_tristate; /* auto|on|off */
 typedef enum { MGS_ADAM_AUTO, MGS_ADAM_SPARSE, MGS_ADAM_DENSE } mgs_cfg_adam;
@@ -99,6 +100,9 @@ typedef struct mgs_train_config {
   /* SuGaR (--strategy sugar) */
   int sugar_from, sugar_prune_at, sugar_samples, sugar_knn_every;
   double sugar_prune_alpha, sugar_entropy, sugar_sdf, sugar_normal;
+  /* GaussianPro (--strategy gaussianpro) */
+  int gpro_schedule[3], gpro_patch, gpro_pm_iters, gpro_neighbors;
+  double gpro_error_max, gpro_error_min, gpro_planar;
   /* where each option's value came from (mgs_cfg_source, by option index) */
   unsigned char source[128];
 } mgs_train_config;

@@ -5,6 +5,7 @@
 #include <string.h>
 #include "train/mgs_config.h"
 #include "train/mgs_init_levelset.h"
+#include "train/mgs_gaussianpro.h"
 #include "train/mgs_strategy.h"
 #include "train/mgs_term.h"
 #include "train/mgs_sugar.h"
@@ -127,9 +128,26 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   mgs_sugar_options so;
   int use_sugar = mgs_config_sugar_options(c, &so);
   if (use_sugar && (st = mgs_strategy_sugar_create(&o->adc, &so, &strat, err))) goto fail;
+  if (c->strategy == MGS_STRAT_GAUSSIANPRO) {
+    mgs_gpro_options go;
+    mgs_gpro_options_default(&go);
+    go.from = c->gpro_schedule[0]; go.until = c->gpro_schedule[1]; go.every = c->gpro_schedule[2];
+    go.patch_size = c->gpro_patch; go.pm_iterations = c->gpro_pm_iters; go.neighbors = c->gpro_neighbors;
+    go.error_max = c->gpro_error_max; go.error_min = c->gpro_error_min;
+    go.seed = c->seed;
+    if ((st = mgs_strategy_gaussianpro_create(&o->adc, &go, ds->views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TRAIN],
+                                              ds->extent, &strat, err)))
+      goto fail;
+  }
   st = mgs_trainer_create(ds, o, g0, strat, &out->trainer, err); /* owns g0 and strat from here */
   g0 = NULL;
   if (st) goto fail;
+  if (c->strategy == MGS_STRAT_GAUSSIANPRO && c->gpro_planar > 0) {
+    mgs_term *pt = NULL;
+    if ((st = mgs_term_planar_create(mgs_strategy_gaussianpro_pro(strat), c->gpro_planar, c->gpro_schedule[0], &pt, err)) ||
+        (st = mgs_trainer_add_term(out->trainer, pt, err)))
+      goto fail;
+  }
   if (use_morse && mo.topo != MGS_MORSE_TOPO_NONE) {
     mgs_term *topo = NULL;
     if ((st = mgs_term_topo_create(out->morse, c->strategy != MGS_STRAT_MORSE, &topo, err))) goto fail;

@@ -77,6 +77,10 @@ static mgs_status write_stats(const char *run, const mgs_train_setup *su, mgs_er
   if (nt) { /* each loss term's weighted value at the last iteration: which terms acted */
     cJSON *terms = cJSON_AddObjectToObject(o, "terms");
     for (size_t k = 0; k < nt; k++) cJSON_AddNumberToObject(terms, mgs_trainer_term_name(t, k), tv[k]);
+    double tsec[16];
+    mgs_trainer_term_seconds(t, tsec, 16);
+    cJSON *tso = cJSON_AddObjectToObject(o, "term_seconds"); /* analyses L_topo triggers included */
+    for (size_t k = 0; tso && k < nt && k < 16; k++) cJSON_AddNumberToObject(tso, mgs_trainer_term_name(t, k), tsec[k]);
   }
   { /* wall seconds per phase of the iteration (the share of each stage, docs/notes/perf-morse.md) */
     static const char *const names[MGS_TRAIN_PHASES] = {"forward", "loss", "backward", "strategy", "adam", "terms"};

@@ -204,6 +204,9 @@ void mgs_trainer_destroy(mgs_trainer *t);
 mgs_status mgs_trainer_add_term(mgs_trainer *t, struct mgs_term *term, mgs_error *err);
 /* The last iteration's weighted value of each term (in the order added); n_out <= count. */
 size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out);
+/* Each term's wall seconds summed over this process's iterations (analyses a term
+ * triggers included); n_out <= count. */
+size_t mgs_trainer_term_seconds(const mgs_trainer *t, double *out, size_t n_out);
 /* The k-th term's name (its ops' name), NULL past the last. */
 const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k);
 /* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */

@@ -111,7 +111,7 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   mgs_adam_destroy(t->adam);
   mgs_strategy_destroy(t->strategy);
   for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
-  free(t->terms); free(t->term_values);
+  free(t->terms); free(t->term_values); free(t->term_s);
   mgs_raster_destroy(t->raster);
   mgs_trainer_large_destroy(t);
   mgs_progress_destroy(t->progress);
@@ -125,10 +125,19 @@ mgs_status mgs_trainer_add_term(mgs_trainer *t, mgs_term *term, mgs_error *err) 
   double *tv = tt ? realloc(t->term_values, (t->n_terms + 1) * sizeof *tv) : NULL;
   if (tt) t->terms = tt;
   if (tv) t->term_values = tv;
-  if (!tt || !tv) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
+  double *tsec = tv ? realloc(t->term_s, (t->n_terms + 1) * sizeof *tsec) : NULL;
+  if (tsec) t->term_s = tsec;
+  if (!tt || !tv || !tsec) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
   t->terms[t->n_terms] = term;
+  t->term_s[t->n_terms] = 0;
   t->term_values[t->n_terms++] = 0;
   return MGS_OK;
+}
+
+size_t mgs_trainer_term_seconds(const mgs_trainer *t, double *out, size_t n_out) {
+  size_t n = t->n_terms < n_out ? t->n_terms : n_out;
+  if (n) memcpy(out, t->term_s, n * sizeof *out);
+  return t->n_terms;
 }
 
 const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k) {
@@ -228,7 +237,9 @@ static mgs_status terms_before_backward(mgs_trainer *t, mgs_term_step *ts, int i
     mgs_term *tm = t->terms[k];
     if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
     ts->value = 0;
+    double a = mgs_now();
     st = tm->ops->model_grad(tm->self, ts, err);
+    t->term_s[k] += mgs_now() - a;
     t->term_values[k] += ts->value;
   }
   return st;
@@ -330,7 +341,9 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
       mgs_term *tm = t->terms[k];
       if (!tm->ops->image_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_IMAGE)) continue;
       ts.value = 0;
+      double a = mgs_now();
       st = tm->ops->image_grad(tm->self, &ts, err);
+      t->term_s[k] += mgs_now() - a;
       t->term_values[k] += ts.value;
     }
     if (st) return st;
@@ -365,7 +378,9 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
       mgs_term *tm = t->terms[k];
       if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
       ts.value = 0;
+      double a = mgs_now();
       st = tm->ops->model_grad(tm->self, &ts, err);
+      t->term_s[k] += mgs_now() - a;
       t->term_values[k] += ts.value;
     }
     if (st) return st;

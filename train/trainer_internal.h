@@ -15,6 +15,7 @@ struct mgs_trainer {
   mgs_strategy *strategy;       /* owned, may be NULL */
   mgs_term **terms;             /* owned loss terms, in the order added */
   double *term_values;          /* each term's last weighted value */
+  double *term_s;               /* each term's wall seconds, summed over the run */
   size_t n_terms;
   mgs_raster *raster;
   mgs_raster_settings rs;

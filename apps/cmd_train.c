@@ -77,6 +77,17 @@ static mgs_status write_stats(const char *run, const mgs_train_setup *su, mgs_er
   if (nt) { /* each loss term's weighted value at the last iteration: which terms acted */
     cJSON *terms = cJSON_AddObjectToObject(o, "terms");
     for (size_t k = 0; k < nt; k++) cJSON_AddNumberToObject(terms, mgs_trainer_term_name(t, k), tv[k]);
+    double tsec[16];
+    mgs_trainer_term_seconds(t, tsec, 16);
+    cJSON *tso = cJSON_AddObjectToObject(o, "term_seconds"); /* analyses L_topo triggers included */
+    for (size_t k = 0; tso && k < nt && k < 16; k++) cJSON_AddNumberToObject(tso, mgs_trainer_term_name(t, k), tsec[k]);
+  }
+  { /* wall seconds per phase of the iteration (the share of each stage, docs/notes/perf-morse.md) */
+    static const char *const names[MGS_TRAIN_PHASES] = {"forward", "loss", "backward", "strategy", "adam", "terms"};
+    double ph[MGS_TRAIN_PHASES];
+    mgs_trainer_phase_seconds(t, ph);
+    cJSON *po = cJSON_AddObjectToObject(o, "phase_seconds");
+    for (int k = 0; po && k < MGS_TRAIN_PHASES; k++) cJSON_AddNumberToObject(po, names[k], ph[k]);
   }
   cJSON_AddNumberToObject(o, "iterations", mgs_trainer_iteration(t));
   cJSON_AddNumberToObject(o, "train_seconds", mgs_trainer_seconds(t));

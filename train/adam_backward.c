@@ -17,6 +17,7 @@ typedef struct fused_ctx {
    * the report then names what a separate step's scan in element order finds first */
   _Atomic uint64_t first_bad[MGS_PARAM_COUNT];
   const int *radii;   /* sparse Adam: only rows with radii > 0 are stepped (NULL: all) */
+  mgs_gaussians *extra; /* gradients of the model's loss terms, added in (NULL: none) */
 } fused_ctx;
 
 static void record_bad(fused_ctx *c, int k, uint64_t key) {
@@ -26,6 +27,13 @@ static void record_bad(fused_ctx *c, int k, uint64_t key) {
 
 static void adam_sink(void *vctx, size_t first, size_t count, const mgs_gaussians *block) {
   fused_ctx *c = vctx;
+  if (c->extra) /* the terms' rows join the block's (scratch) and are cleared for the next step */
+    for (int gid = 0; gid < MGS_PARAM_SH_DC; gid++) {
+      size_t d = (size_t)mgs_param_dim((mgs_param_group)gid);
+      float *bg = mgs_gaussians_group((mgs_gaussians *)block, (mgs_param_group)gid);
+      float *eg = mgs_gaussians_group(c->extra, (mgs_param_group)gid) + first * d;
+      for (size_t i = 0; i < count * d; i++) { bg[i] += eg[i]; eg[i] = 0; }
+    }
   for (int k = 0; k < c->n_grp; k++) {
     mgs_adam_group gp = c->grp[k];
     size_t row = gp.row, off = first * row;
@@ -57,30 +65,40 @@ static void adam_sink(void *vctx, size_t first, size_t count, const mgs_gaussian
 
 static mgs_status step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                 const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
-                                unsigned group_mask, const int *radii, mgs_error *err);
+                                unsigned group_mask, const int *radii, mgs_gaussians *extra, mgs_error *err);
 
 mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                   const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                   unsigned group_mask, mgs_error *err) {
-  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, NULL, err);
+  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, NULL, NULL, err);
+}
+
+mgs_status mgs_adam_step_backward_extra(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                        const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                        unsigned group_mask, mgs_gaussians *extra, mgs_error *err) {
+  if (!extra || extra->n != model->n)
+    return mgs_error_set(err, MGS_ERR_ARG, "adam: extra gradients with %zu rows for %zu Gaussians", extra ? extra->n : 0,
+                         model->n);
+  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, NULL, extra, err);
 }
 
 mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                          const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                          unsigned group_mask, const int *radii, mgs_error *err) {
   if (!radii) return mgs_error_set(err, MGS_ERR_ARG, "adam: sparse step without radii");
-  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, radii, err);
+  return step_backward(a, model, r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, group_mask, radii, NULL, err);
 }
 
 static mgs_status step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                 const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
-                                unsigned group_mask, const int *radii, mgs_error *err) {
+                                unsigned group_mask, const int *radii, mgs_gaussians *extra, mgs_error *err) {
   if (a->n != model->n)
     return mgs_error_set(err, MGS_ERR_ARG, "adam: %zu moments for %zu Gaussians", a->n, model->n);
   fused_ctx c;
   memset(&c, 0, sizeof c);
   for (int k = 0; k < MGS_PARAM_COUNT; k++) atomic_init(&c.first_bad[k], UINT64_MAX);
   c.radii = radii;
+  c.extra = extra;
   /* the step counts advance only once the backward has accepted its arguments */
   mgs_adam probe = *a;
   c.n_grp = mgs_adam_prepare(&probe, model, NULL, group_mask, c.grp, c.gid);

@@ -5,13 +5,15 @@
  *
  *   image_grad  after the photometric loss, before the backward: adds dL/dcolor of the
  *               rendered image (the rasterizer's backward carries it to the Gaussians);
- *   model_grad  after the backward, before the strategy's hook and Adam: adds dL/dθ into
- *               the gradient model directly (losses defined on the Gaussians or on fields
- *               built from them).
+ *   model_grad  before the strategy's post hook and Adam: adds dL/dθ into the gradient
+ *               model directly (losses defined on the Gaussians or on fields built from
+ *               them). It only ADDS to s->grad's mean, log-scale, rotation and opacity rows
+ *               and reads nothing of it: where the backward and Adam run fused, s->grad
+ *               holds only the model terms' gradients and the fused step adds them to the
+ *               rasterizer's (train/adam_backward.c); elsewhere (densification steps,
+ *               sparse Adam) it is the full gradient after the backward.
  *
- * A term that is active in an iteration with a model_grad makes the trainer run that
- * iteration's backward and Adam step unfused (the gradient arrays must exist); image-only
- * terms keep the fused path. Terms see the model before this iteration's density control.
+ * Terms see the model before this iteration's density control and Adam step.
  * Their state (schedules, cached analyses) goes into checkpoints through save/load. */
 #ifndef MGS_TERM_H
 #define MGS_TERM_H

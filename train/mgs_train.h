@@ -71,6 +71,15 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
 mgs_status mgs_adam_step_backward(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                   const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                   unsigned group_mask, mgs_error *err);
+/* The same with `extra` (model->n rows; its mean, log-scale, rotation and opacity groups)
+ * added to the rasterizer's gradients before the step: loss terms on the Gaussians,
+ * computed before the backward, join the fused step. Those groups of extra are set to
+ * zero as they are read (the next step's terms add into a clean array). Equal to the
+ * separate passes up to the order of the float sums: raster + (term1 + term2) here,
+ * (raster + term1) + term2 there (tests/train/test_fused.c). */
+mgs_status mgs_adam_step_backward_extra(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
+                                        const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
+                                        unsigned group_mask, mgs_gaussians *extra, mgs_error *err);
 /* Sparse Adam (train/adam_sparse.c), a deliberate difference from the reference, which
  * steps every Gaussian: only rows with radii[i] > 0 (the Gaussians the last view saw) are
  * stepped; the others keep parameters and moments unchanged. Otherwise as
@@ -200,6 +209,9 @@ void mgs_trainer_destroy(mgs_trainer *t);
 mgs_status mgs_trainer_add_term(mgs_trainer *t, struct mgs_term *term, mgs_error *err);
 /* The last iteration's weighted value of each term (in the order added); n_out <= count. */
 size_t mgs_trainer_term_values(const mgs_trainer *t, double *out, size_t n_out);
+/* Each term's wall seconds summed over this process's iterations (analyses a term
+ * triggers included); n_out <= count. */
+size_t mgs_trainer_term_seconds(const mgs_trainer *t, double *out, size_t n_out);
 /* The k-th term's name (its ops' name), NULL past the last. */
 const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k);
 /* One iteration. MGS_ERR_NUMERIC stops training: the message names the parameter group. */

@@ -7,6 +7,7 @@
 #include <unistd.h>
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
+#include "core/mgs_parallel.h"
 #include "train/gauss_local.h"
 #include "train/mgs_term_normal.h"
 
@@ -37,42 +38,76 @@ mgs_status mgs_normal_options_check(const mgs_normal_options *o, mgs_error *err)
 }
 
 /* ---------------------------------------------------------------- the loss */
+/* Rows are cut into fixed chunks (not per thread), each summed in order, and the chunks'
+   sums added in order: the value does not depend on the threads; each row's gradient is
+   its own. */
+#define NORMAL_CHUNK 2048
+typedef struct normal_job {
+  const mgs_gaussians *g;
+  const float *T;
+  double p, scale;
+  mgs_gaussians *grad;
+  double *sum;   /* per chunk */
+  size_t *cnt;   /* per chunk */
+} normal_job;
+
+static void normal_rows(void *vp, size_t cb, size_t ce) {
+  const normal_job *j = vp;
+  const mgs_gaussians *g = j->g;
+  mgs_gaussians *grad = j->grad;
+  const double p = j->p, scale = j->scale;
+  for (size_t c = cb; c < ce; c++) {
+    double sum = 0;
+    size_t cnt = 0, end = (c + 1) * NORMAL_CHUNK < g->n ? (c + 1) * NORMAL_CHUNK : g->n;
+    for (size_t i = c * NORMAL_CHUNK; i < end; i++) {
+      const float *t6 = j->T + 6 * i;
+      const double tr = (double)t6[0] + t6[3] + t6[5];
+      if (!(tr >= 0.05) || !isfinite(tr)) continue; /* outside the band: no direction */
+      const double M[9] = {t6[0] / tr, t6[1] / tr, t6[2] / tr, t6[1] / tr, t6[3] / tr, t6[4] / tr, t6[2] / tr, t6[4] / tr, t6[5] / tr};
+      mgs_gauss_local L;
+      mgs_gauss_local_get(g, i, &L);
+      /* weights w_k = softmax(−2p log s_k) (shifted by the max for exp's range) */
+      double z[3], zmax = -INFINITY, w[3], ws = 0, cc[3], Mr[3][3], h = 0;
+      for (int k = 0; k < 3; k++) { z[k] = -2.0 * p * (double)g->log_scale[3 * i + k]; zmax = fmax(zmax, z[k]); }
+      for (int k = 0; k < 3; k++) { w[k] = exp(z[k] - zmax); ws += w[k]; }
+      for (int k = 0; k < 3; k++) {
+        w[k] /= ws;
+        for (int a = 0; a < 3; a++) Mr[k][a] = M[3 * a] * L.R[k] + M[3 * a + 1] * L.R[3 + k] + M[3 * a + 2] * L.R[6 + k];
+        cc[k] = L.R[k] * Mr[k][0] + L.R[3 + k] * Mr[k][1] + L.R[6 + k] * Mr[k][2]; /* r_kᵀ M r_k */
+        h += w[k] * cc[k];
+      }
+      sum += 1.0 - h;
+      cnt++;
+      if (!grad) continue;
+      /* ∂(1−h)/∂log s_j = 2p w_j (c_j − h); ∂(1−h)/∂R[a][k] = −2 w_k (M r_k)_a */
+      for (int k = 0; k < 3; k++) grad->log_scale[3 * i + k] += (float)(scale * 2.0 * p * w[k] * (cc[k] - h));
+      double dR[9], dq[4];
+      for (int a = 0; a < 3; a++)
+        for (int k = 0; k < 3; k++) dR[3 * a + k] = -2.0 * w[k] * Mr[k][a];
+      mgs_gauss_local_dq(&L, dR, dq);
+      for (int k = 0; k < 4; k++) grad->rot[4 * i + k] += (float)(scale * dq[k]);
+    }
+    j->sum[c] = sum;
+    j->cnt[c] = cnt;
+  }
+}
+
 mgs_status mgs_normal_loss(const mgs_gaussians *g, const float *T, double p, double weight, mgs_gaussians *grad,
                            double *value, size_t *used, mgs_error *err) {
   if (grad && grad->n != g->n)
     return mgs_error_set(err, MGS_ERR_ARG, "normal loss: gradient model has %zu rows, model %zu", grad->n, g->n);
+  const size_t chunks = (g->n + NORMAL_CHUNK - 1) / NORMAL_CHUNK;
+  double *sums = malloc((chunks + 1) * sizeof(double));
+  size_t *cnts = malloc((chunks + 1) * sizeof(size_t));
+  if (!sums || !cnts) { free(sums); free(cnts); return mgs_error_set(err, MGS_ERR_NOMEM, "normal loss: out of memory"); }
+  normal_job job = {g, T, p, g->n ? weight / (double)g->n : 0, grad, sums, cnts};
+  mgs_parallel_for(0, chunks, 1, normal_rows, &job);
   double sum = 0;
   size_t cnt = 0;
-  const double scale = g->n ? weight / (double)g->n : 0;
-  for (size_t i = 0; i < g->n; i++) {
-    const float *t6 = T + 6 * i;
-    const double tr = (double)t6[0] + t6[3] + t6[5];
-    if (!(tr >= 0.05) || !isfinite(tr)) continue; /* outside the band: no direction */
-    const double M[9] = {t6[0] / tr, t6[1] / tr, t6[2] / tr, t6[1] / tr, t6[3] / tr, t6[4] / tr, t6[2] / tr, t6[4] / tr, t6[5] / tr};
-    mgs_gauss_local L;
-    mgs_gauss_local_get(g, i, &L);
-    /* weights w_k = softmax(−2p log s_k) (shifted by the max for exp's range) */
-    double z[3], zmax = -INFINITY, w[3], ws = 0, c[3], Mr[3][3], h = 0;
-    for (int k = 0; k < 3; k++) { z[k] = -2.0 * p * (double)g->log_scale[3 * i + k]; zmax = fmax(zmax, z[k]); }
-    for (int k = 0; k < 3; k++) { w[k] = exp(z[k] - zmax); ws += w[k]; }
-    for (int k = 0; k < 3; k++) {
-      w[k] /= ws;
-      for (int a = 0; a < 3; a++) Mr[k][a] = M[3 * a] * L.R[k] + M[3 * a + 1] * L.R[3 + k] + M[3 * a + 2] * L.R[6 + k];
-      c[k] = L.R[k] * Mr[k][0] + L.R[3 + k] * Mr[k][1] + L.R[6 + k] * Mr[k][2]; /* r_kᵀ M r_k */
-      h += w[k] * c[k];
-    }
-    sum += 1.0 - h;
-    cnt++;
-    if (!grad) continue;
-    /* ∂(1−h)/∂log s_j = 2p w_j (c_j − h); ∂(1−h)/∂R[a][k] = −2 w_k (M r_k)_a */
-    for (int k = 0; k < 3; k++) grad->log_scale[3 * i + k] += (float)(scale * 2.0 * p * w[k] * (c[k] - h));
-    double dR[9], dq[4];
-    for (int a = 0; a < 3; a++)
-      for (int k = 0; k < 3; k++) dR[3 * a + k] = -2.0 * w[k] * Mr[k][a];
-    mgs_gauss_local_dq(&L, dR, dq);
-    for (int k = 0; k < 4; k++) grad->rot[4 * i + k] += (float)(scale * dq[k]);
-  }
-  if (value) *value = scale * sum;
+  for (size_t c = 0; c < chunks; c++) { sum += sums[c]; cnt += cnts[c]; }
+  free(sums);
+  free(cnts);
+  if (value) *value = job.scale * sum;
   if (used) *used = cnt;
   return MGS_OK;
 }

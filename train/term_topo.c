@@ -72,6 +72,20 @@ static mgs_gaussians slice(const mgs_gaussians *m, size_t s, size_t n) {
   return v;
 }
 
+typedef struct copy_job { const mgs_gaussians *g; mgs_gaussians *L; const size_t *idx; } copy_job;
+
+static void copy_rows(void *vp, size_t b, size_t e) {
+  const copy_job *c = vp;
+  const mgs_gaussians *g = c->g;
+  mgs_gaussians *L = c->L;
+  for (size_t j = b; j < e; j++) {
+    size_t i = c->idx[j];
+    for (int q = 0; q < 3; q++) { L->mean[3 * j + q] = g->mean[3 * i + q]; L->log_scale[3 * j + q] = g->log_scale[3 * i + q]; }
+    for (int q = 0; q < 4; q++) L->rot[4 * j + q] = g->rot[4 * i + q];
+    L->opacity[j] = g->opacity[i];
+  }
+}
+
 /* The candidates of every end, in order, into t->loc (the field's groups only). */
 static mgs_status gather_all(topo_term *t, const mgs_gaussians *g, size_t total, mgs_error *err) {
   mgs_status st = MGS_OK;
@@ -79,13 +93,8 @@ static mgs_status gather_all(topo_term *t, const mgs_gaussians *g, size_t total,
   if (st == MGS_OK && t->locg->capacity < total) st = mgs_gaussians_reserve(t->locg, total, err);
   if (st) return st;
   t->loc->n = t->locg->n = total;
-  mgs_gaussians *L = t->loc;
-  for (size_t j = 0; j < total; j++) {
-    size_t i = t->gat.idx[j];
-    for (int q = 0; q < 3; q++) { L->mean[3 * j + q] = g->mean[3 * i + q]; L->log_scale[3 * j + q] = g->log_scale[3 * i + q]; }
-    for (int q = 0; q < 4; q++) L->rot[4 * j + q] = g->rot[4 * i + q];
-    L->opacity[j] = g->opacity[i];
-  }
+  copy_job job = {g, t->loc, t->gat.idx};
+  mgs_parallel_for(0, total, 4096, copy_rows, &job);
   return MGS_OK;
 }
 

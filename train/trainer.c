@@ -107,10 +107,11 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   if (!t) return;
   mgs_gaussians_destroy(t->g);
   mgs_gaussians_destroy(t->grad);
+  mgs_gaussians_destroy(t->tgrad);
   mgs_adam_destroy(t->adam);
   mgs_strategy_destroy(t->strategy);
   for (size_t i = 0; i < t->n_terms; i++) mgs_term_destroy(t->terms[i]);
-  free(t->terms); free(t->term_values);
+  free(t->terms); free(t->term_values); free(t->term_s);
   mgs_raster_destroy(t->raster);
   mgs_trainer_large_destroy(t);
   mgs_progress_destroy(t->progress);
@@ -124,10 +125,19 @@ mgs_status mgs_trainer_add_term(mgs_trainer *t, mgs_term *term, mgs_error *err) 
   double *tv = tt ? realloc(t->term_values, (t->n_terms + 1) * sizeof *tv) : NULL;
   if (tt) t->terms = tt;
   if (tv) t->term_values = tv;
-  if (!tt || !tv) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
+  double *tsec = tv ? realloc(t->term_s, (t->n_terms + 1) * sizeof *tsec) : NULL;
+  if (tsec) t->term_s = tsec;
+  if (!tt || !tv || !tsec) { mgs_term_destroy(term); return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory"); }
   t->terms[t->n_terms] = term;
+  t->term_s[t->n_terms] = 0;
   t->term_values[t->n_terms++] = 0;
   return MGS_OK;
+}
+
+size_t mgs_trainer_term_seconds(const mgs_trainer *t, double *out, size_t n_out) {
+  size_t n = t->n_terms < n_out ? t->n_terms : n_out;
+  if (n) memcpy(out, t->term_s, n * sizeof *out);
+  return t->n_terms;
 }
 
 const char *mgs_trainer_term_name(const mgs_trainer *t, size_t k) {
@@ -205,6 +215,34 @@ static mgs_status zero_grad(mgs_trainer *t, mgs_error *err) {
       for (size_t i = 0; i < n; i++) memset(t->grad->sh_rest + i * MGS_SH_REST_MAX, 0, used * sizeof(float));
   }
   return MGS_OK;
+}
+
+/* The model terms of this iteration into t->tgrad (cleared where the last fused step did
+   not), before the backward: they read the model, never the rasterizer's gradients. */
+static mgs_status terms_before_backward(mgs_trainer *t, mgs_term_step *ts, int it, mgs_error *err) {
+  size_t n = t->g->n;
+  if (!t->tgrad && !(t->tgrad = mgs_gaussians_create(n, t->g->sh_degree)))
+    return mgs_error_set(err, MGS_ERR_NOMEM, "trainer: out of memory");
+  if (t->tgrad->capacity < n) {
+    mgs_status st = mgs_gaussians_reserve(t->tgrad, n, err);
+    if (st) return st;
+  }
+  if (t->tgrad_clean_n != n || t->tgrad->n != n)
+    for (int k = 0; k < MGS_PARAM_SH_DC; k++)
+      memset(mgs_gaussians_group(t->tgrad, (mgs_param_group)k), 0, n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
+  t->tgrad->n = n;
+  ts->grad = t->tgrad;
+  mgs_status st = MGS_OK;
+  for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
+    mgs_term *tm = t->terms[k];
+    if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
+    ts->value = 0;
+    double a = mgs_now();
+    st = tm->ops->model_grad(tm->self, ts, err);
+    t->term_s[k] += mgs_now() - a;
+    t->term_values[k] += ts->value;
+  }
+  return st;
 }
 
 /* An Adam error (it names the group) as the reason training stopped. */
@@ -287,10 +325,15 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     ts.width = ro.width; ts.height = ro.height; ts.active_sh = t->active_sh; ts.extent = ext;
     ts.rng = &t->rng; ts.dl_dcolor = t->dl; ts.raster = t->raster;
   }
-  /* when neither the strategy's hook nor a loss term needs the gradients or the unstepped
-     model, the backward and the Adam step run fused (identical results) */
-  int fused = step_opt && !(term_hooks & MGS_TERM_MODEL) &&
+  /* when the strategy's hook needs neither the gradients nor the unstepped model, the
+     backward and the Adam step run fused (identical results); model terms then add their
+     gradients before the backward into t->tgrad, which the fused step adds in (equal up to
+     the order of the float sums; sparse Adam would skip the rows the view did not see, so
+     it keeps the separate passes) */
+  int model_terms = (term_hooks & MGS_TERM_MODEL) != 0;
+  int fused = step_opt && (!model_terms || !o->sparse_adam) &&
               (!use_strategy || (t->strategy->ops->fusable && t->strategy->ops->fusable(t->strategy->self, &ss)));
+  int terms_first = fused && model_terms;
   if (!fused && step_opt) {
     if ((st = zero_grad(t, err))) return st;
     ss.grad = t->grad;
@@ -302,7 +345,9 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
       mgs_term *tm = t->terms[k];
       if (!tm->ops->image_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_IMAGE)) continue;
       ts.value = 0;
+      double a = mgs_now();
       st = tm->ops->image_grad(tm->self, &ts, err);
+      t->term_s[k] += mgs_now() - a;
       t->term_values[k] += ts.value;
     }
     if (st) return st;
@@ -317,19 +362,29 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
     return st;
-  if (fused) st = mgs_trainer_large_adam_fused(t, ro.radii, all, err);
+  if (terms_first) {
+    if ((st = terms_before_backward(t, &ts, it, err))) return st;
+    double t2b = mgs_now();
+    t->phase_s[MGS_PHASE_TERMS] += t2b - t2;
+    t2 = t2b;
+    t->tgrad_clean_n = 0; /* until the fused step has cleared what the terms wrote */
+    st = mgs_adam_step_backward_extra(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, t->tgrad, err);
+    if (st == MGS_OK) t->tgrad_clean_n = t->g->n;
+  } else if (fused) st = mgs_trainer_large_adam_fused(t, ro.radii, all, err);
   else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
   double t3 = mgs_now();
   t->phase_s[MGS_PHASE_BACKWARD] += t3 - t2;
-  if (term_hooks & MGS_TERM_MODEL) {
+  if ((term_hooks & MGS_TERM_MODEL) && !terms_first) {
     ts.grad = t->grad;
     for (size_t k = 0; k < t->n_terms && st == MGS_OK; k++) {
       mgs_term *tm = t->terms[k];
       if (!tm->ops->model_grad || !(tm->ops->active(tm->self, it) & MGS_TERM_MODEL)) continue;
       ts.value = 0;
+      double a = mgs_now();
       st = tm->ops->model_grad(tm->self, &ts, err);
+      t->term_s[k] += mgs_now() - a;
       t->term_values[k] += ts.value;
     }
     if (st) return st;

@@ -15,6 +15,7 @@ struct mgs_trainer {
   mgs_strategy *strategy;       /* owned, may be NULL */
   mgs_term **terms;             /* owned loss terms, in the order added */
   double *term_values;          /* each term's last weighted value */
+  double *term_s;               /* each term's wall seconds, summed over the run */
   size_t n_terms;
   mgs_raster *raster;
   mgs_raster_settings rs;
@@ -30,6 +31,8 @@ struct mgs_trainer {
   size_t grad_clean_n;          /* ... of this many Gaussians ... */
   int grad_clean_sh;            /* ... with this many active SH-rest coefficients */
   size_t gm_cap;
+  mgs_gaussians *tgrad;         /* model terms' gradients when they join the fused step */
+  size_t tgrad_clean_n;         /* rows of tgrad known zero (the fused step clears what it reads) */
   double seconds;               /* training wall time */
   double ema_loss, ema_psnr;    /* the reference's 0.4/0.6 moving average */
   double last_loss;

@@ -11,6 +11,7 @@
 #include "synth.h"
 #include "train/mgs_train.h"
 #include "train/mgs_strategy.h"
+#include "train/mgs_term.h"
 
 /* max |a - b| / max(1, |a|) over a group's active floats */
 static double rel_diff(const float *a, const float *b, size_t n) {
@@ -215,9 +216,85 @@ static void test_trainer_fused_equals_separate(void) {
   mgs_gaussians_destroy(gt);
 }
 
+/* Two model terms that overlap on rows (so the order of the float sums differs between
+   the two paths): a pull of the means toward the origin and of opacity and log-scales
+   toward 0. */
+typedef struct { double w; int calls; } pull_term;
+static unsigned pull_active(void *self, int it) { (void)self; return it >= 3 ? MGS_TERM_MODEL : 0; }
+static mgs_status pull_mean(void *self, mgs_term_step *s, mgs_error *err) {
+  (void)err;
+  pull_term *t = self;
+  t->calls++;
+  for (size_t i = 0; i < s->model->n; i++) {
+    for (int k = 0; k < 3; k++) s->grad->mean[3 * i + k] += (float)(t->w * s->model->mean[3 * i + k]);
+    s->grad->opacity[i] += (float)(t->w * s->model->opacity[i]);
+  }
+  return MGS_OK;
+}
+static mgs_status pull_shape(void *self, mgs_term_step *s, mgs_error *err) {
+  (void)err;
+  pull_term *t = self;
+  t->calls++;
+  for (size_t i = 0; i < s->model->n; i++) {
+    for (int k = 0; k < 3; k++) s->grad->log_scale[3 * i + k] += (float)(t->w * s->model->log_scale[3 * i + k]);
+    for (int k = 0; k < 4; k++) s->grad->rot[4 * i + k] += (float)(0.1 * t->w * s->model->rot[4 * i + k]);
+    s->grad->opacity[i] += (float)(0.5 * t->w);
+  }
+  return MGS_OK;
+}
+static void pull_destroy(void *self) { (void)self; }
+static const mgs_term_ops pull_mean_ops = {"pull-mean", pull_active, NULL, pull_mean, NULL, NULL, pull_destroy};
+static const mgs_term_ops pull_shape_ops = {"pull-shape", pull_active, NULL, pull_shape, NULL, NULL, pull_destroy};
+
+/* Model terms join the fused step (their gradients added in by the sink) where the
+   strategy allows fusing: the result equals the trainer that never fuses (terms after a
+   separate backward) up to float rounding, and the terms changed the model. */
+static void test_trainer_terms_fused_equal_separate(void) {
+  mgs_gaussians *gt = synth_model(150, 42);
+  mgs_dataset *ds = synth_dataset(gt, 6, 1, 48, 40);
+  mgs_train_options o;
+  mgs_train_options_default(&o);
+  o.iterations = 60;
+  o.sh_every = 10;
+  o.adc.densify_from = 5;
+  o.adc.densify_every = 10;
+  o.adc.opacity_reset_every = 25;
+  o.adc.densify_until = 45;
+  o.seed = 3;
+  pull_term pa[2] = {{0.05, 0}, {0.02, 0}}, pb[2] = {{0.05, 0}, {0.02, 0}};
+  mgs_trainer *a = make_trainer(ds, &o, 1), *b = make_trainer(ds, &o, 0), *c = make_trainer(ds, &o, 1);
+  mgs_error err;
+  CHECK_OK(mgs_trainer_add_term(a, mgs_term_create(&pull_mean_ops, &pa[0]), &err), &err);
+  CHECK_OK(mgs_trainer_add_term(a, mgs_term_create(&pull_shape_ops, &pa[1]), &err), &err);
+  CHECK_OK(mgs_trainer_add_term(b, mgs_term_create(&pull_mean_ops, &pb[0]), &err), &err);
+  CHECK_OK(mgs_trainer_add_term(b, mgs_term_create(&pull_shape_ops, &pb[1]), &err), &err);
+  CHECK_OK(mgs_trainer_run(a, &err), &err);
+  CHECK_OK(mgs_trainer_run(b, &err), &err);
+  CHECK_OK(mgs_trainer_run(c, &err), &err);
+  CHECK(pa[0].calls == pb[0].calls && pa[1].calls == pb[1].calls && pa[0].calls == 57);
+  const mgs_gaussians *ma = mgs_trainer_model(a), *mb = mgs_trainer_model(b), *mc = mgs_trainer_model(c);
+  CHECK_MSG(ma->n == mb->n, "counts %zu vs %zu", ma->n, mb->n);
+  double moved = 0;
+  if (ma->n == mb->n)
+    for (int k = 0; k < MGS_PARAM_COUNT; k++) {
+      mgs_param_group pg = (mgs_param_group)k;
+      size_t len = ma->n * (size_t)mgs_param_dim(pg);
+      double d = rel_diff(mgs_gaussians_group((mgs_gaussians *)ma, pg), mgs_gaussians_group((mgs_gaussians *)mb, pg), len);
+      CHECK_MSG(d <= 1e-5, "group %s differs by %g", mgs_param_name(pg), d);
+      if (ma->n == mc->n && k < MGS_PARAM_SH_DC)
+        moved = fmax(moved, rel_diff(mgs_gaussians_group((mgs_gaussians *)ma, pg), mgs_gaussians_group((mgs_gaussians *)mc, pg), len));
+    }
+  CHECK_MSG(ma->n != mc->n || moved > 1e-3, "the terms did not change the model (%g)", moved);
+  CHECK_NEAR(mgs_trainer_last_loss(a), mgs_trainer_last_loss(b), 1e-6);
+  mgs_trainer_destroy(a); mgs_trainer_destroy(b); mgs_trainer_destroy(c);
+  mgs_dataset_destroy(ds);
+  mgs_gaussians_destroy(gt);
+}
+
 int main(void) {
   RUN(test_fused_equals_separate);
   RUN(test_fused_nonfinite_names_group);
   RUN(test_trainer_fused_equals_separate);
+  RUN(test_trainer_terms_fused_equal_separate);
   return mgs_test_finish();
 }

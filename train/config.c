@@ -6,6 +6,7 @@
 #include "train/mgs_config.h"
 #include "core/mgs_core.h"
 #include "train/mgs_sugar.h"
+#include "train/mgs_gaussianpro.h"
 
 #define NOT_DIST_MS_REASON "Mini-Splatting renders every training view for its global reinitialisation and simplification; the distributed trainer has no such pass"
 
@@ -492,7 +493,8 @@ void mgs_config_scheduled(const mgs_train_config *c, mgs_train_config *out) {
   int *ms[] = {&out->sh_every, &out->densify_from, &out->densify_until, &out->densify_every,
                &out->opacity_reset_every, &out->position_lr_max_steps, &out->morse_every, &out->morse_warmup,
                &out->morse_until, &out->pers_loss_schedule[0], &out->pers_loss_schedule[1],
-               &out->pers_loss_schedule[2]};
+               &out->pers_loss_schedule[2], &out->sugar_from, &out->sugar_prune_at, &out->sugar_knn_every,
+               &out->gpro_schedule[0], &out->gpro_schedule[1], &out->gpro_schedule[2]};
   for (size_t i = 0; i < sizeof ms / sizeof ms[0]; i++) *ms[i] = mgs_config_scale_iteration(c, *ms[i]);
   out->schedule_scale = 1.0; /* applied */
 }
@@ -597,6 +599,7 @@ int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options 
 }
 
 int mgs_config_sugar_options(const mgs_train_config *c, mgs_sugar_options *o) {
+  SCHEDULED(c);
   mgs_sugar_options_default(o);
   o->from_iter = c->sugar_from;
   o->prune_at = c->sugar_prune_at;
@@ -621,11 +624,30 @@ int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o) 
 
 int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term_options *o) {
   mgs_2dgs_term_options_default(o);
+  o->dist_from = mgs_config_scale_iteration(c, o->dist_from);
+  o->normal_from = mgs_config_scale_iteration(c, o->normal_from);
   o->lambda_dist = c->lambda_dist >= 0 ? c->lambda_dist : (format == MGS_DATASET_NERF_SYNTHETIC ? 1000.0 : 0.0);
   o->lambda_normal = c->lambda_normal;
   if (c->iters < o->dist_from) o->dist_from = c->iters / 2 > 0 ? c->iters / 2 : 1;       /* short runs: */
   if (c->iters < o->normal_from) o->normal_from = (3 * c->iters) / 4 > 0 ? (3 * c->iters) / 4 : 1; /* the later part */
   return c->model == MGS_MODEL_2DGS;
+}
+
+int mgs_config_gpro_options(const mgs_train_config *c, mgs_gpro_options *o) {
+  SCHEDULED(c);
+  mgs_gpro_options_default(o);
+  o->from = c->gpro_schedule[0];
+  o->until = c->gpro_schedule[1];
+  o->every = c->gpro_schedule[2];
+  o->patch_size = c->gpro_patch;
+  o->pm_iterations = c->gpro_pm_iters;
+  o->neighbors = c->gpro_neighbors;
+  o->error_max = c->gpro_error_max;
+  o->error_min = c->gpro_error_min;
+  o->seed = c->seed;
+  return c->strategy == MGS_STRAT_GAUSSIANPRO;
+}
+
 int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_options *o) {
   mgs_minisplat_options_default(o);
   mgs_train_options to;

@@ -184,6 +184,9 @@ int mgs_config_persloss_options(const mgs_train_config *c, mgs_persloss_options 
 int mgs_config_2dgs_options(const mgs_train_config *c, int format, mgs_2dgs_term_options *o);
 /* The normal loss; returns 1 if it is on (its start moved to half a run shorter than twice it). */
 int mgs_config_normal_options(const mgs_train_config *c, mgs_normal_options *o);
+/* GaussianPro's propagation; returns 1 if it is on (--strategy gaussianpro). */
+struct mgs_gpro_options;
+int mgs_config_gpro_options(const mgs_train_config *c, struct mgs_gpro_options *o);
 /* Mini-Splatting (-D); returns 1 if --strategy is one of them. */
 int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_options *o);
 /* --schedule-scale applied: a copy of c with every iteration milestone times the scale

@@ -128,13 +128,8 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   mgs_sugar_options so;
   int use_sugar = mgs_config_sugar_options(c, &so);
   if (use_sugar && (st = mgs_strategy_sugar_create(&o->adc, &so, &strat, err))) goto fail;
-  if (c->strategy == MGS_STRAT_GAUSSIANPRO) {
-    mgs_gpro_options go;
-    mgs_gpro_options_default(&go);
-    go.from = c->gpro_schedule[0]; go.until = c->gpro_schedule[1]; go.every = c->gpro_schedule[2];
-    go.patch_size = c->gpro_patch; go.pm_iterations = c->gpro_pm_iters; go.neighbors = c->gpro_neighbors;
-    go.error_max = c->gpro_error_max; go.error_min = c->gpro_error_min;
-    go.seed = c->seed;
+  mgs_gpro_options go;
+  if (mgs_config_gpro_options(c, &go)) {
     if ((st = mgs_strategy_gaussianpro_create(&o->adc, &go, ds->views[MGS_SPLIT_TRAIN], ds->n_views[MGS_SPLIT_TRAIN],
                                               ds->extent, &strat, err)))
       goto fail;
@@ -144,7 +139,7 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   if (st) goto fail;
   if (c->strategy == MGS_STRAT_GAUSSIANPRO && c->gpro_planar > 0) {
     mgs_term *pt = NULL;
-    if ((st = mgs_term_planar_create(mgs_strategy_gaussianpro_pro(strat), c->gpro_planar, c->gpro_schedule[0], &pt, err)) ||
+    if ((st = mgs_term_planar_create(mgs_strategy_gaussianpro_pro(strat), c->gpro_planar, go.from, &pt, err)) ||
         (st = mgs_trainer_add_term(out->trainer, pt, err)))
       goto fail;
   }

@@ -101,7 +101,7 @@ static void gp_destroy(void *self) {
   free(m);
 }
 
-static const mgs_strategy_ops gpro_ops = {"gaussianpro", gp_pre, gp_post, gp_save, gp_load, gp_destroy, gp_fusable};
+static const mgs_strategy_ops gpro_ops = {"gaussianpro", gp_pre, gp_post, gp_save, gp_load, gp_destroy, gp_fusable, NULL};
 
 mgs_status mgs_strategy_gaussianpro_create(const mgs_adc_options *adc, const mgs_gpro_options *o, const mgs_view *views,
                                            size_t n_views, double extent, mgs_strategy **out, mgs_error *err) {

@@ -59,7 +59,7 @@ static void ss_destroy(void *self) {
   free(t);
 }
 
-static const mgs_strategy_ops sugar_strat_ops = {"sugar", ss_pre, ss_post, ss_save, ss_load, ss_destroy, ss_fusable};
+static const mgs_strategy_ops sugar_strat_ops = {"sugar", ss_pre, ss_post, ss_save, ss_load, ss_destroy, ss_fusable, NULL};
 
 mgs_status mgs_strategy_sugar_create(const mgs_adc_options *a, const mgs_sugar_options *o, mgs_strategy **out,
                                      mgs_error *err) {

@@ -5,6 +5,7 @@
  * summed gradients written to its own slot (no atomics). A tile row of 16 pixels is one
  * vector: along a row, k = x Tw - Tu varies and l = y Tw - Tv is constant. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 #include "core/mgs_log.h"
 #include "core/mgs_parallel.h"

@@ -14,6 +14,9 @@
 #include "core/mgs_mesh.h"
 #include "core/mgs_ply.h"
 #include "core/mgs_rng.h"
+#include <sys/stat.h>
+#include <unistd.h>
+#include <limits.h>
 #include "mgs_test.h"
 #include "vdb_test_util.h"
 
@@ -134,6 +137,12 @@ static void test_fusion_cli(void) {
 }
 
 int main(void) {
+  /* a folder of its own: test_vdb_cli writes the same cli_out/cli_stderr names next door */
+  const char *cl = cli();
+  static char abs_cli[4096];
+  if (cl[0] != '/' && realpath(cl, abs_cli)) setenv("MGS_CLI", abs_cli, 1);
+  mkdir("fusion_cli_work", 0755);
+  if (chdir("fusion_cli_work") != 0) { fprintf(stderr, "cannot enter fusion_cli_work\n"); return 1; }
   RUN(test_fusion_cli);
   return mgs_test_finish();
 }

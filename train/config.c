@@ -660,5 +660,6 @@ int mgs_config_minisplat_options(const mgs_train_config *c, mgs_minisplat_option
   o->lr_restart = mgs_config_scale_iteration(c, o->lr_restart);
   o->simplify_fraction = c->simplify_fraction;
   o->depth_points = (size_t)c->ms_depth_points;
+  o->blur_min_px = c->ms_blur_min_px;
   return c->strategy == MGS_STRAT_MINISPLAT || c->strategy == MGS_STRAT_MINISPLAT_D;
 }

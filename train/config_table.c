@@ -102,6 +102,9 @@ static const mgs_option TABLE[] = {
    NOT_DIST_MS},
   {"ms-depth-points", "ms_depth_points", MGS_OPT_INT, F(ms_depth_points), "0", 0, BIG, NULL, NULL, MGS_GROUP_BASELINE,
    REC, "mini-splatting: points of a depth reinitialisation (authors: 3.5M; 0 = the model's count then)", NOT_DIST_MS},
+  {"ms-blur-min-px", "ms_blur_min_px", MGS_OPT_DOUBLE, F(ms_blur_min_px), "8", 0, 1e6, NULL, NULL, MGS_GROUP_BASELINE,
+   REC, "mini-splatting: floor in pixels of the blur-split threshold H*W/5000 (which is under a pixel below ~70x70)",
+   NOT_DIST_MS},
   {"freeze", "freeze", MGS_OPT_BOOL, F(freeze), "0", 0, 1, NULL, "1", MGS_GROUP_BASELINE, REC,
    "diagnostic: never update the parameters (test calibration)", "a diagnostic of the serial trainer"},
 

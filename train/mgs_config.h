@@ -68,6 +68,7 @@ typedef struct mgs_train_config {
   int freeze;
   double schedule_scale, simplify_fraction; /* every milestone x s; Mini-Splatting */
   int ms_depth_points;
+  double ms_blur_min_px;
   /* large scenes */
   int visibility;
   double vis_tile;

@@ -39,6 +39,7 @@ typedef struct mgs_minisplat_options {
   int simplify1, simplify2;  /* 15000 (-D: densify_until), 20000 */
   int lr_restart;            /* 5000 */
   double blur_share;         /* 1/5000 of the view's pixels */
+  double blur_min_px;        /* 8: floor of that threshold in pixels (under ~70² it is below one pixel: every visible Gaussian would split) */
   double simplify_fraction;  /* 0.5 (authors: 0.3 for large scenes) */
   double prune_share;        /* 0.01 of the cumulative importance at simplify2 */
   size_t depth_points;       /* points of a reinitialisation; 0 = the model's count then */

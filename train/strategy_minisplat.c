@@ -18,6 +18,7 @@ void mgs_minisplat_options_default(mgs_minisplat_options *o) {
   o->simplify2 = 20000;
   o->lr_restart = 5000;
   o->blur_share = 1.0 / 5000.0;
+  o->blur_min_px = 8;
   o->simplify_fraction = 0.5;
   o->prune_share = 0.01;
   o->depth_points = 0;
@@ -358,7 +359,7 @@ static mgs_status ms_pre(void *self, mgs_strategy_step *s, mgs_error *err) {
   mgs_status st = mgs_raster_blend_stats(s->raster, &b, err);
   if (st) return st;
   if (b.n != m->n) return MGS_OK; /* not this model's forward */
-  double thr = (double)b.width * b.height * m->o.blur_share;
+  double thr = fmax((double)b.width * b.height * m->o.blur_share, m->o.blur_min_px);
   for (size_t i = 0; i < m->n; i++) m->blur[i] |= (double)b.area_max[i] > thr;
   return MGS_OK;
 }

@@ -118,8 +118,9 @@ static mgs_status strategy_step(mgs_strategy *s, mgs_gaussians *g, mgs_adam *a, 
 
 static void blur_split(void) {
   /* A: large, in front, dominating most of the 100x100 view; B: small, right behind A's
-     centre (never the max weight); the threshold is 100*100/5000 = 2 pixels */
-  for (int variant = 0; variant < 2; variant++) {
+     centre (never the max weight); the threshold is max(100*100/5000 = 2, the floor of 8) pixels;
+     variant 2: a floor above the view's pixel count splits nothing */
+  for (int variant = 0; variant < 3; variant++) {
     mgs_gaussians *g = model_of(2);
     set_gaussian(g, 0, (float[3]){0, 0, 0.3f}, (float[3]){0.4f, 0.3f, 0.02f}, 0.9f, 0.5f);
     set_gaussian(g, 1, (float[3]){0, 0, -0.3f}, (float[3]){0.03f, 0.03f, 0.03f}, 0.9f, 0.5f);
@@ -129,6 +130,7 @@ static void blur_split(void) {
     o.adc.densify_from = 0; o.adc.densify_every = 10; o.adc.densify_until = 1000;
     o.adc.percent_dense = 1.0f; /* nothing is large for ADC's own split */
     if (variant == 1) o.blur_share = 1.0; /* no Gaussian dominates the whole view */
+    if (variant == 2) o.blur_min_px = 100 * 100 + 1;
     mgs_strategy *s = NULL;
     mgs_error err;
     CHECK_OK(mgs_strategy_minisplat_create(&o, &s, &err), &err);

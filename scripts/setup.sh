@@ -13,7 +13,7 @@ PKGS=(
   libopenmpi-dev openmpi-bin
   netgen-doc gmsh-doc python3-open3d
   libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
-  chromium
+  chromium blender
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -47,7 +47,9 @@ MGS_VINLINE void isect_eval(const mgs_surfel *sf, const isect_cols *c, float Y, 
   o->ddy = sf->cy - Y;
   o->rho2 = MGS_2DGS_FILTER_INV2 * (c->ddx * c->ddx + o->ddy * o->ddy);
   v16f rho = v16f_min(o->rho3, o->rho2);
-  o->z = o->sx * sf->Tw[0] + o->sy * sf->Tw[1] + sf->Tw[2];
+  /* where the screen-space filter wins the depth is the centre's (as the authors': an
+     edge-on surfel's ray-plane intersection lies arbitrarily far away) */
+  o->z = v16f_select(o->rho3 <= o->rho2, o->sx * sf->Tw[0] + o->sy * sf->Tw[1] + sf->Tw[2], v16f_set1(sf->Tw[2]));
   o->G = v16f_exp_neg(v16f_set1(-0.5f) * rho);
   o->raw = v16f_set1(sf->opacity) * o->G;
   o->alpha = v16f_min(v16f_set1(MGS_ALPHA_MAX), o->raw);
@@ -312,8 +314,9 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       dLdz = v16f_and(m, dLdz);
       v16i use3 = e.rho3 <= e.rho2;
       v16f gGs = v16f_and(use3, zero - e.G * dLdG); /* d rho3/ds = 2 s, dG/drho = -G/2 */
-      v16f gsx = gGs * e.sx + dLdz * sf->Tw[0];
-      v16f gsy = gGs * e.sy + dLdz * sf->Tw[1];
+      v16f dLdz3 = v16f_and(use3, dLdz); /* the filter's depth is Tw[2]: no path through s */
+      v16f gsx = gGs * e.sx + dLdz3 * sf->Tw[0];
+      v16f gsy = gGs * e.sy + dLdz3 * sf->Tw[1];
       v16f g2 = v16f_and(m & ~use3, v16f_set1(-0.5f * MGS_2DGS_FILTER_INV2 * 2.0f) * e.G * dLdG);
       ac[SG_CX] += g2 * ic.ddx;
       ac[SG_CY] += g2 * e.ddy;
@@ -325,8 +328,8 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       v16f dlx = gpy * ic.kz - gpz * ic.ky, dly = gpz * ic.kx - gpx * ic.kz, dlz = gpx * ic.ky - gpy * ic.kx;
       ac[SG_T + 0] -= dkx; ac[SG_T + 1] -= dky; ac[SG_T + 2] -= dkz;
       ac[SG_T + 3] -= dlx; ac[SG_T + 4] -= dly; ac[SG_T + 5] -= dlz;
-      ac[SG_T + 6] += X * dkx + Y * dlx + dLdz * e.sx;
-      ac[SG_T + 7] += X * dky + Y * dly + dLdz * e.sy;
+      ac[SG_T + 6] += X * dkx + Y * dlx + dLdz3 * e.sx;
+      ac[SG_T + 7] += X * dky + Y * dly + dLdz3 * e.sy;
       ac[SG_T + 8] += X * dkz + Y * dlz + dLdz;
     }
     for (int c = 0; c < SG_COUNT; c++) out[c] = v16f_sum(ac[c]);

@@ -508,6 +508,8 @@ void mgs_config_scheduled(const mgs_train_config *c, mgs_train_config *out) {
 #define SCHEDULED(c) mgs_train_config sched_; mgs_config_scheduled(c, &sched_); c = &sched_
 
 void mgs_config_train_options(const mgs_train_config *c, mgs_train_options *o) {
+  const int unscaled_densify_every = c->densify_every;
+  const double scale = c->schedule_scale;
   SCHEDULED(c);
   mgs_train_options_default(o);
   o->iterations = c->iters;
@@ -536,6 +538,9 @@ void mgs_config_train_options(const mgs_train_config *c, mgs_train_options *o) {
   if (c->model == MGS_MODEL_2DGS && !set_here(c, "min-opacity")) o->adc.min_opacity = 0.05f; /* the authors' opacity_cull */
   TAKE("max-screen-size", o->adc.max_screen_px, (float)c->max_screen_size);
   o->adc.white_background = c->background == MGS_BG_WHITE;
+  /* compressed: transparent Gaussians get the reference's iterations after a reset (its
+     unscaled densification interval) before they are pruned */
+  if (scale < 1.0) o->adc.reset_prune_wait = unscaled_densify_every;
   o->visibility = c->visibility == MGS_AUTO_OFF_ON_AUTO ? -1 : c->visibility == MGS_AUTO_OFF_ON_ON;
   o->vis_tile = c->vis_tile;
   o->sparse_adam = c->adam == MGS_ADAM_AUTO ? -1 : c->adam == MGS_ADAM_SPARSE;

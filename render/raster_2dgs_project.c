@@ -8,7 +8,7 @@
 #include <string.h>
 #include "core/mgs_math.h"
 #include "core/mgs_parallel.h"
-#include "render/raster_internal.h"
+#include "render/raster_2dgs.h"
 
 #define CUTOFF 3.0f
 #define FILTER_SIZE 0.707106f
@@ -49,6 +49,25 @@ static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const dou
   Tw[2] = (float)td[2];
 }
 
+/* The affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T. */
+static void surf_coeffs(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, mgs_surf2d *sf) {
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; k++) {
+    w[k] = Tw[k];
+    u[k] = (double)Tu[k] - (double)ox * w[k];
+    v[k] = (double)Tv[k] - (double)oy * w[k];
+  }
+  double c0[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
+  double c1[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
+  double c2[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  for (int k = 0; k < 3; k++) {
+    sf->c0[k] = (float)c0[k];
+    sf->c1[k] = (float)c1[k];
+    sf->c2[k] = (float)c2[k];
+  }
+  sf->det = (float)(w[0] * c2[0] + w[1] * c2[1] + w[2] * c2[2]);
+}
+
 static void cull(mgs_raster *r, size_t i) {
   r->radii[i] = 0;
   r->count[i] = 0;
@@ -65,9 +84,9 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return;
   const float *q = g->rot + 4 * i;
   if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return;
-  mgs_surfel *sf = &r->surf[i];
-  float R[9], s[2];
-  surfel_T(r, cp, i, td, R, s, sf->Tu, sf->Tv, sf->Tw);
+  mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
+  float R[9], s[2], Tu[3], Tv[3], Tw[3];
+  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
   /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
   double cosv = 0;
   for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
@@ -75,7 +94,6 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   sf->nsign = cosv > 0 ? 1.0f : -1.0f;
   for (int k = 0; k < 3; k++) sf->n[k] = sf->nsign * R[3 * k + 2];
   /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
-  const float *Tu = sf->Tu, *Tv = sf->Tv, *Tw = sf->Tw;
   const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
   float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
   if (d == 0 || !isfinite(d)) return;
@@ -88,8 +106,9 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   float ext = hx > hy ? hx : hy;
   float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
   if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return;
-  sf->cx = cx;
-  sf->cy = cy;
+  sf->ox = cx;
+  sf->oy = cy;
+  surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
   /* the reference's getRect, in its pixel coordinates (centres at integers) */
   double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
   int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
@@ -173,29 +192,70 @@ void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
   mgs_parallel_for(0, idx ? m : r->n, 256, project_range, &pc);
 }
 
+static void cross_d(const double a[3], const double b[3], double c[3]) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* surf_coeffs backward: dL/d(c0, c1, c2, det) (gs, S2 layout) to dL/d(Tu, Tv, Tw). (ox, oy)
+ * only moves the origin p is written about (p itself does not depend on it): a constant. */
+static void coeffs_backward(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, const float *gs,
+                            float dTu[3], float dTv[3], float dTw[3]) {
+  double u[3], v[3], w[3], g0[3], g1[3], g2[3], c2[3], t[3];
+  for (int k = 0; k < 3; k++) {
+    w[k] = Tw[k];
+    u[k] = (double)Tu[k] - (double)ox * w[k];
+    v[k] = (double)Tv[k] - (double)oy * w[k];
+    g0[k] = gs[S2_C0 + k];
+    g1[k] = gs[S2_C1 + k];
+  }
+  cross_d(u, v, c2);
+  /* det = w.c2 */
+  for (int k = 0; k < 3; k++) g2[k] = gs[S2_C2 + k] + (double)gs[S2_DET] * w[k];
+  double du[3], dv[3], dw[3];
+  for (int k = 0; k < 3; k++) dw[k] = (double)gs[S2_DET] * c2[k];
+  /* c2 = u x v: du = v x g2, dv = g2 x u */
+  cross_d(v, g2, du);
+  cross_d(g2, u, dv);
+  /* c0 = v x w (= Tv x Tw): dv += w x g0, dw += g0 x v */
+  cross_d(w, g0, t); for (int k = 0; k < 3; k++) dv[k] += t[k];
+  cross_d(g0, v, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
+  /* c1 = w x u: dw += u x g1, du += g1 x w */
+  cross_d(u, g1, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
+  cross_d(g1, w, t); for (int k = 0; k < 3; k++) du[k] += t[k];
+  /* u = Tu - ox Tw, v = Tv - oy Tw */
+  for (int k = 0; k < 3; k++) {
+    dTu[k] = (float)du[k];
+    dTv[k] = (float)dv[k];
+    dTw[k] = (float)(dw[k] - ox * du[k] - oy * dv[k]);
+  }
+}
+
 /* Backward of one binned surfel: gs = its summed slots. */
 static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float *gs, mgs_gaussians *grad, size_t gbase,
                          float *grad_mean2d) {
   const mgs_gaussians *g = r->g;
-  const mgs_surfel *sf = &r->surf[i];
+  const mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
   const mgs_proj_aux *ax = &r->aux[i];
   const double *V = r->cam.w2c;
   double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
   for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
   float R[9], s[2], Tu[3], Tv[3], Tw[3];
   surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
-  float dTu[3] = {gs[0], gs[1], gs[2]}, dTv[3] = {gs[3], gs[4], gs[5]}, dTw[3] = {gs[6], gs[7], gs[8]};
+  float dTu[3], dTv[3], dTw[3];
+  coeffs_backward(Tu, Tv, Tw, sf->ox, sf->oy, gs, dTu, dTv, dTw);
   /* the authors' densification signal: dL/dT's centre column times the depth, in NDC */
   if (grad_mean2d) {
-    float gx = gs[2] * Tw[2] * 0.5f * (float)r->width, gy = gs[5] * Tw[2] * 0.5f * (float)r->height;
+    float gx = dTu[2] * Tw[2] * 0.5f * (float)r->width, gy = dTv[2] * Tw[2] * 0.5f * (float)r->height;
     grad_mean2d[i] = sqrtf(gx * gx + gy * gy);
   }
   /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
-  float gcx = gs[SG_CX], gcy = gs[SG_CY];
+  float gcx = gs[S2_OX], gcy = gs[S2_OY];
   if (gcx != 0 || gcy != 0) {
     const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
     float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-    float gd = -(gcx * sf->cx + gcy * sf->cy) / d;
+    float gd = -(gcx * sf->ox + gcy * sf->oy) / d;
     for (int k = 0; k < 3; k++) {
       float f = t[k] / d;
       dTu[k] += gcx * f * Tw[k];
@@ -217,7 +277,7 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
   for (int a = 0; a < 3; a++) {
     dR[3 * a] = s[0] * gv[0][a];
     dR[3 * a + 1] = s[1] * gv[1][a];
-    dR[3 * a + 2] = sf->nsign * gs[SG_N + a];
+    dR[3 * a + 2] = sf->nsign * gs[S2_N + a];
   }
   float ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
   float ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
@@ -237,9 +297,9 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
     float qv[4] = {w, x, y, z};
     for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += (gq[k] - qv[k] * qd) / qn;
   }
-  grad->opacity[gi] += gs[SG_OP] * sf->opacity * (1.0f - sf->opacity);
+  grad->opacity[gi] += gs[S2_OP] * sf->opacity * (1.0f - sf->opacity);
   float drgb[3], ddir[3];
-  for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gs[SG_R + k];
+  for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gs[S2_R + k];
   mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, drgb,
                   grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, ddir);
   if (ax->dist > 0) {
@@ -255,12 +315,12 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
-    float gs[SG_COUNT] = {0};
-    const float *q = r->sgrad + (size_t)r->gauss_off[i] * SG_STRIDE;
-    for (uint32_t k = 0; k < cnt; k++, q += SG_STRIDE)
-      for (int c = 0; c < SG_COUNT; c++) gs[c] += q[c];
+    float gs[S2_COUNT] = {0};
+    const float *q = r->sgrad + (size_t)r->gauss_off[i] * S2_STRIDE;
+    for (uint32_t k = 0; k < cnt; k++, q += S2_STRIDE)
+      for (int c = 0; c < S2_COUNT; c++) gs[c] += q[c];
     int any = 0;
-    for (int c = 0; c < SG_COUNT; c++) any |= gs[c] != 0;
+    for (int c = 0; c < S2_COUNT; c++) any |= gs[c] != 0;
     if (!any) continue;
     backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d);
   }
@@ -277,7 +337,7 @@ static int grow(void **p, size_t n, size_t sz) {
 mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err) {
   if (n > r->cap_surf) {
     size_t c = n + n / 4;
-    if (!grow((void **)&r->surf, c, sizeof(mgs_surfel)))
+    if (!grow((void **)&r->surf, c, sizeof(mgs_surf2d)))
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_project.c: out of memory for %zu surfels", n);
     r->cap_surf = c;
   }

@@ -18,15 +18,26 @@ typedef struct mgs_surf2d {
   float det;                 /* det T: hit depth = det / p.z */
   float opacity;             /* sigmoid(logit) */
   float rgb[3];              /* SH colour, clamped at 0 */
-  float ylo, yhi;            /* pixel-centre rows and columns that can hold alpha >= 1/255 */
-  float xlo, xhi;            /* (a conservative box) */
-  float n[3];                /* world normal (third axis of R) turned towards the camera */
-  float nsign;               /* n = nsign * R e3 */
+  /* Where alpha >= 1/255 can hold, about (ox, oy): the ellipse {rho3 <= rmax} (slightly
+     enlarged) has on the row y - oy = yc + d the columns xc + sl d +- sqrt(h0 - kq d^2)
+     (h0 < 0: no pixel; h0 = inf, kq = 0: an unbounded conic, every column); the filter's
+     disc {rho2 <= rmax} lies in the square |x - ox|, |y - oy| <= rf. */
+  float yc, xc, sl, h0, kq, rf;
+  float pad[2];
 } mgs_surf2d;
 
-/* The surfel records live in r->surf (allocated by raster_2dgs_project.c with this size;
- * no other file reads them). */
+/* What only the maps pass and the per-surfel backward read. */
+typedef struct mgs_surf2d_cold {
+  float n[3];  /* world normal (third axis of R) turned towards the camera */
+  float nsign; /* n = nsign * R e3 */
+} mgs_surf2d_cold;
+
+/* The records live in r->surf: cap_surf hot ones, then cap_surf cold ones (allocated by
+ * raster_2dgs_project.c; no other file reads them). */
 static inline mgs_surf2d *mgs_raster2d_surf(const mgs_raster *r) { return (mgs_surf2d *)(void *)r->surf; }
+static inline mgs_surf2d_cold *mgs_raster2d_cold(const mgs_raster *r) {
+  return (mgs_surf2d_cold *)(void *)(mgs_raster2d_surf(r) + r->cap_surf);
+}
 
 /* Slot of one (surfel, tile) intersection: the tile's pixel sums of dL/d(c0, c1, c2, det,
  * ox, oy as the filter centre, opacity, rgb, n) (S2_STRIDE floats, 64-byte aligned). */

@@ -75,28 +75,29 @@ static void cull(mgs_raster *r, size_t i) {
 
 static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
 
-static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
+static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   const mgs_gaussians *g = r->g;
   const double *V = r->cam.w2c;
   double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
   for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
   cull(r, i);
-  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return;
+  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return 0;
   const float *q = g->rot + 4 * i;
-  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return;
+  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return 0;
   mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
   float R[9], s[2], Tu[3], Tv[3], Tw[3];
   surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
   /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
   double cosv = 0;
   for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
-  if (cosv == 0 || !isfinite(cosv)) return;
-  sf->nsign = cosv > 0 ? 1.0f : -1.0f;
-  for (int k = 0; k < 3; k++) sf->n[k] = sf->nsign * R[3 * k + 2];
+  if (cosv == 0 || !isfinite(cosv)) return 0;
+  mgs_surf2d_cold *cd = mgs_raster2d_cold(r) + i;
+  cd->nsign = cosv > 0 ? 1.0f : -1.0f;
+  for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * R[3 * k + 2];
   /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
   const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
   float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-  if (d == 0 || !isfinite(d)) return;
+  if (d == 0 || !isfinite(d)) return 0;
   float f[3] = {t[0] / d, t[1] / d, t[2] / d};
   float cx = f[0] * Tu[0] * Tw[0] + f[1] * Tu[1] * Tw[1] + f[2] * Tu[2] * Tw[2];
   float cy = f[0] * Tv[0] * Tw[0] + f[1] * Tv[1] * Tw[1] + f[2] * Tv[2] * Tw[2];
@@ -105,7 +106,7 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   float hx = sqrtf(hx0 > 1e-4f ? hx0 : 1e-4f), hy = sqrtf(hy0 > 1e-4f ? hy0 : 1e-4f);
   float ext = hx > hy ? hx : hy;
   float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
-  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return;
+  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return 0;
   sf->ox = cx;
   sf->oy = cy;
   surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
@@ -114,20 +115,13 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
   int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_x);
   int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_y);
-  if ((x1 - x0) * (y1 - y0) == 0) return;
-  /* colour */
+  if ((x1 - x0) * (y1 - y0) == 0) return 0;
+  /* view direction (the colour follows per block of 16: surfel_colours) */
   mgs_proj_aux *ax = &r->aux[i];
   double dd[3] = {p[0] - cp->campos[0], p[1] - cp->campos[1], p[2] - cp->campos[2]};
   double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
   for (int k = 0; k < 3; k++) ax->dir[k] = dist > 0 ? (float)(dd[k] / dist) : 0.0f;
   ax->dist = (float)dist;
-  float rgb[3];
-  mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, rgb);
-  for (int k = 0; k < 3; k++) {
-    if (!isfinite(rgb[k])) return;
-    ax->clamped[k] = rgb[k] < 0;
-    sf->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
-  }
   for (int k = 0; k < 3; k++) ax->t[k] = (float)td[k];
   float op = mgs_sigmoidf(g->opacity[i]);
   sf->opacity = op;
@@ -135,40 +129,67 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   memset(sp, 0, sizeof *sp);
   sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
   r->radii[i] = (int)radius;
-  if (op < MGS_ALPHA_MIN) return; /* alpha < 1/255 everywhere: nothing to bin */
-  /* The box that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
-     and the box of the ellipse {u^2 + v^2 = rmax} (compute_aabb with that cutoff; an
-     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; pixels outside
-     the box receive nothing from the surfel, so skipping them changes no value. */
+  if (op < MGS_ALPHA_MIN) return 1; /* alpha < 1/255 everywhere: nothing to bin */
+  /* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
+     {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in
+     the pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its
+     quadratic part is positive definite (p.z keeps one sign inside: p = 0 has no pixel);
+     otherwise (a surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax,
+     which already has 0.1 %, and the margins below) so that the float per-pixel rho3 of
+     every pixel it leaves out is above rmax: skipping those pixels changes no value. Tiles
+     of the authors' rect that miss it are not binned (the same result, as 3DGS's binning). */
+  int x0b = x0, y0b = y0, x1b = x1, y1b = y1;
   {
     float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
-    float rf = sqrtf(rmax / MGS_2DGS_FILTER_INV2);
-    float ylo = cy - rf, yhi = cy + rf, xlo = cx - rf, xhi = cx + rf;
-    const float t2[3] = {rmax, rmax, -1.0f};
-    float d2 = t2[0] * Tw[0] * Tw[0] + t2[1] * Tw[1] * Tw[1] + t2[2] * Tw[2] * Tw[2];
-    int bounded = d2 < 0 && isfinite(d2);
-    if (bounded) {
-      float f2[3] = {t2[0] / d2, t2[1] / d2, t2[2] / d2};
-      float py2 = f2[0] * Tv[0] * Tw[0] + f2[1] * Tv[1] * Tw[1] + f2[2] * Tv[2] * Tw[2];
-      float ey = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
-      float px2 = f2[0] * Tu[0] * Tw[0] + f2[1] * Tu[1] * Tw[1] + f2[2] * Tu[2] * Tw[2];
-      float ex = px2 * px2 - (f2[0] * Tu[0] * Tu[0] + f2[1] * Tu[1] * Tu[1] + f2[2] * Tu[2] * Tu[2]);
-      ey = sqrtf(ey > 0 ? ey : 0);
-      ex = sqrtf(ex > 0 ? ex : 0);
-      bounded = isfinite(py2) && isfinite(ey) && isfinite(px2) && isfinite(ex);
-      if (bounded) {
-        ylo = fminf(ylo, py2 - ey); yhi = fmaxf(yhi, py2 + ey);
-        xlo = fminf(xlo, px2 - ex); xhi = fmaxf(xhi, px2 + ex);
-      }
+    double rf = sqrt((double)rmax / MGS_2DGS_FILTER_INV2) * 1.001 + 0.02;
+    double rb = (double)rmax * 1.01 + 1e-3, wq[3] = {1.0, 1.0, -rb}, M[6] = {0};
+    for (int k = 0; k < 3; k++) {
+      double A = sf->c0[k], B = sf->c1[k], C = sf->c2[k];
+      M[0] += wq[k] * A * A; M[1] += wq[k] * A * B; M[2] += wq[k] * B * B;
+      M[3] += wq[k] * A * C; M[4] += wq[k] * B * C; M[5] += wq[k] * C * C;
     }
-    if (!bounded) { ylo = xlo = -INFINITY; yhi = xhi = INFINITY; }
-    float my = 1.0f + 1e-3f * (yhi - ylo), mx = 1.0f + 1e-3f * (xhi - xlo);
-    sf->ylo = ylo - my; sf->yhi = yhi + my;
-    sf->xlo = xlo - mx; sf->xhi = xhi + mx;
+    double det2 = M[0] * M[2] - M[1] * M[1];
+    double xlo = -rf, xhi = rf, ylo = -rf, yhi = rf;
+    double yc = 0, xc = 0, sl = 0, h0 = INFINITY, kq = 0;
+    int bounded = M[0] > 0 && det2 > 0 && isfinite(det2) && isfinite(M[3] + M[4] + M[5]);
+    if (bounded) {
+      xc = (M[4] * M[1] - M[3] * M[2]) / det2;
+      yc = (M[3] * M[1] - M[4] * M[0]) / det2;
+      double qc = M[5] + M[3] * xc + M[4] * yc;
+      if (qc < 0) {
+        h0 = -qc / M[0];
+        kq = det2 / (M[0] * M[0]);
+        sl = -M[1] / M[0];
+        double ex = sqrt(-qc * M[2] / det2), ey = sqrt(-qc * M[0] / det2);
+        xlo = fmin(xlo, xc - ex); xhi = fmax(xhi, xc + ex);
+        ylo = fmin(ylo, yc - ey); yhi = fmax(yhi, yc + ey);
+      } else {
+        h0 = -1; xc = yc = 0; /* no point with rho3 <= rmax: the disc alone */
+      }
+      bounded = isfinite(xc) && isfinite(yc) && isfinite(h0) && isfinite(kq) && isfinite(sl) && isfinite(xlo + xhi + ylo + yhi) &&
+                fabs(xlo) + fabs(xhi) + fabs(ylo) + fabs(yhi) < 1e7;
+    }
+    if (!bounded) { yc = xc = sl = kq = 0; h0 = INFINITY; xlo = ylo = -INFINITY; xhi = yhi = INFINITY; }
+    sf->yc = (float)yc; sf->xc = (float)xc; sf->sl = (float)sl; sf->h0 = (float)h0; sf->kq = (float)kq;
+    sf->rf = (float)rf;
+    sf->pad[0] = sf->pad[1] = 0;
+    double mx = 0.05 + 1e-3 * (xhi - xlo), my = 0.05 + 1e-3 * (yhi - ylo);
+    if (bounded) {
+      x0b = clamp_tile(floor((cx + xlo - mx - 0.5) * ts), r->tiles_x);
+      x1b = clamp_tile(floor((cx + xhi + mx - 0.5) * ts) + 1, r->tiles_x);
+      y0b = clamp_tile(floor((cy + ylo - my - 0.5) * ts), r->tiles_y);
+      y1b = clamp_tile(floor((cy + yhi + my - 0.5) * ts) + 1, r->tiles_y);
+    }
   }
+  if (x0b > x0) x0 = x0b;
+  if (x1b < x1) x1 = x1b;
+  if (y0b > y0) y0 = y0b;
+  if (y1b < y1) y1 = y1b;
+  if (x1 <= x0 || y1 <= y0) return 1;
   uint16_t *rc = r->rect + 4 * i;
   rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
   r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+  return 1;
 }
 
 typedef struct proj_ctx {
@@ -177,9 +198,55 @@ typedef struct proj_ctx {
   const uint32_t *idx;
 } proj_ctx;
 
+/* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
+ * 16 at once; a non-finite colour culls its surfel. */
+static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
+  const mgs_gaussians *g = r->g;
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  float rgbl[3][16];
+#if defined(__AVX512F__)
+  float dirl[3][16];
+  int32_t lane[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
+    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
+    for (int k = 0; k < 3; k++) dirl[k][l] = ax->dir[k];
+  }
+  mgs_sh_eval16(r->s.sh_degree, g->sh_dc + 3 * blk[0], g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane,
+                (uint16_t)((1u << nl) - 1), dirl, rgbl);
+#else
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    float c3[3];
+    mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, r->aux[i].dir, c3);
+    for (int k = 0; k < 3; k++) rgbl[k][l] = c3[k];
+  }
+#endif
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    mgs_proj_aux *ax = &r->aux[i];
+    mgs_surf2d *sf = surf + i;
+    float rgb[3] = {rgbl[0][l], rgbl[1][l], rgbl[2][l]};
+    if (!isfinite(rgb[0]) || !isfinite(rgb[1]) || !isfinite(rgb[2])) { cull(r, i); continue; }
+    for (int k = 0; k < 3; k++) {
+      ax->clamped[k] = rgb[k] < 0;
+      sf->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
+    }
+  }
+}
+
 static void project_range(void *vctx, size_t b, size_t e) {
   const proj_ctx *pc = vctx;
-  for (size_t k = b; k < e; k++) project_one(pc->r, &pc->cp, pc->idx ? pc->idx[k] : k);
+  size_t blk[16];
+  int nl = 0;
+  for (size_t k = b; k < e; k++) {
+    size_t i = pc->idx ? pc->idx[k] : k;
+    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
+    if (project_one(pc->r, &pc->cp, i)) blk[nl++] = i;
+    if (nl == 16) { surfel_colours(pc->r, blk, nl); nl = 0; }
+  }
+  if (nl) surfel_colours(pc->r, blk, nl);
 }
 
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
@@ -232,9 +299,10 @@ static void coeffs_backward(const float Tu[3], const float Tv[3], const float Tw
   }
 }
 
-/* Backward of one binned surfel: gs = its summed slots. */
+/* Backward of one binned surfel but its colour: gs = its summed slots; out: dL/d(unclamped
+ * colour) and the mean gradient so far. */
 static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float *gs, mgs_gaussians *grad, size_t gbase,
-                         float *grad_mean2d) {
+                         float *grad_mean2d, float drgb_out[3], float dmean_out[3]) {
   const mgs_gaussians *g = r->g;
   const mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
   const mgs_proj_aux *ax = &r->aux[i];
@@ -277,7 +345,7 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
   for (int a = 0; a < 3; a++) {
     dR[3 * a] = s[0] * gv[0][a];
     dR[3 * a + 1] = s[1] * gv[1][a];
-    dR[3 * a + 2] = sf->nsign * gs[S2_N + a];
+    dR[3 * a + 2] = mgs_raster2d_cold(r)[i].nsign * gs[S2_N + a];
   }
   float ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
   float ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
@@ -298,20 +366,60 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
     for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += (gq[k] - qv[k] * qd) / qn;
   }
   grad->opacity[gi] += gs[S2_OP] * sf->opacity * (1.0f - sf->opacity);
-  float drgb[3], ddir[3];
-  for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gs[S2_R + k];
-  mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, drgb,
-                  grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, ddir);
-  if (ax->dist > 0) {
-    float dd = ax->dir[0] * ddir[0] + ax->dir[1] * ddir[1] + ax->dir[2] * ddir[2];
-    for (int k = 0; k < 3; k++) dmean[k] += (ddir[k] - ax->dir[k] * dd) / ax->dist;
+  for (int k = 0; k < 3; k++) {
+    drgb_out[k] = ax->clamped[k] ? 0.0f : gs[S2_R + k];
+    dmean_out[k] = dmean[k];
   }
-  for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dmean[k];
+}
+
+/* The SH backward of the surfels blk[0..nl) (spread below 2^24), 16 at once, and their
+ * view-direction part of the mean gradient; then the mean gradients. */
+static void surfel_colours_backward(mgs_raster *r, const size_t *blk, int nl, float drgb[3][16], float dmean[3][16],
+                                    mgs_gaussians *grad, size_t gbase) {
+  const mgs_gaussians *g = r->g;
+  float ddir[3][16];
+#if defined(__AVX512F__)
+  float dirl[3][16];
+  int32_t lane[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
+    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
+    for (int k = 0; k < 3; k++) {
+      dirl[k][l] = ax->dir[k];
+      if (!ok) drgb[k][l] = 0.0f;
+    }
+  }
+  mgs_sh_backward16(r->s.sh_degree, g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane, (uint16_t)((1u << nl) - 1), dirl,
+                    (const float(*)[16])drgb, grad->sh_dc + 3 * (blk[0] - gbase),
+                    grad->sh_rest + (size_t)MGS_SH_REST_MAX * (blk[0] - gbase), ddir);
+#else
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l], gi = i - gbase;
+    float g3[3] = {drgb[0][l], drgb[1][l], drgb[2][l]}, o3[3];
+    mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, r->aux[i].dir, g3,
+                    grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, o3);
+    for (int k = 0; k < 3; k++) ddir[k][l] = o3[k];
+  }
+#endif
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l], gi = i - gbase;
+    const mgs_proj_aux *ax = &r->aux[i];
+    float dm[3] = {dmean[0][l], dmean[1][l], dmean[2][l]};
+    if (ax->dist > 0) {
+      float dd = ax->dir[0] * ddir[0][l] + ax->dir[1] * ddir[1][l] + ax->dir[2] * ddir[2][l];
+      for (int k = 0; k < 3; k++) dm[k] += (ddir[k][l] - ax->dir[k] * dd) / ax->dist;
+    }
+    for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dm[k];
+  }
 }
 
 void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d) {
   cam_par cp;
   cam_par_init(r, &cp);
+  size_t blk[16];
+  float drgb[3][16], dmean[3][16];
+  int nl = 0;
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
@@ -322,8 +430,14 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
     int any = 0;
     for (int c = 0; c < S2_COUNT; c++) any |= gs[c] != 0;
     if (!any) continue;
-    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d);
+    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
+    float d3[3], m3[3];
+    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d, d3, m3);
+    for (int k = 0; k < 3; k++) { drgb[k][nl] = d3[k]; dmean[k][nl] = m3[k]; }
+    blk[nl++] = i;
+    if (nl == 16) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
   }
+  if (nl) surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase);
 }
 
 static int grow(void **p, size_t n, size_t sz) {
@@ -337,7 +451,7 @@ static int grow(void **p, size_t n, size_t sz) {
 mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err) {
   if (n > r->cap_surf) {
     size_t c = n + n / 4;
-    if (!grow((void **)&r->surf, c, sizeof(mgs_surf2d)))
+    if (!grow((void **)&r->surf, c, sizeof(mgs_surf2d) + sizeof(mgs_surf2d_cold)))
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_project.c: out of memory for %zu surfels", n);
     r->cap_surf = c;
   }

@@ -56,17 +56,37 @@ MGS_VINLINE void isect_eval(const mgs_surf2d *sf, const isect_cols *c, float Y, 
   o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN));
 }
 
-/* Does the surfel's alpha >= 1/255 box miss the columns [x0, x0 + ncols)? */
-static inline int misses_cols(const mgs_surf2d *sf, int x0, int ncols) {
-  return sf->xhi < (float)x0 + 0.5f || sf->xlo > (float)(x0 + ncols) - 0.5f;
+MGS_VINLINE v16f zero_minus(v16f a) { return v16f_set1(0.0f) - a; }
+MGS_VINLINE v16f v16f_abs(v16f a) { return (v16f)((v16i)a & v16i_set1(0x7fffffff)); }
+
+MGS_VINLINE uint32_t v16i_bits(v16i m) {
+#if defined(__AVX512F__)
+  return _mm512_test_epi32_mask((__m512i)m, (__m512i)m);
+#else
+  uint32_t b = 0;
+  for (int i = 0; i < 16; i++) b |= (uint32_t)(m[i] != 0) << i;
+  return b;
+#endif
 }
 
-/* Rows [*lo, *hi] of the tile starting at pixel row y0 whose centres lie in the surfel's
- * [ylo, yhi]. */
-static inline void row_span(const mgs_surf2d *sf, int y0, int nrows, int *lo, int *hi) {
-  float a = sf->ylo - 0.5f - (float)y0, b = sf->yhi - 0.5f - (float)y0;
-  *lo = a <= 0 ? 0 : (a >= (float)nrows ? nrows : (int)ceilf(a));
-  *hi = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
+/* Bit y set: row y of the tile at (x0, y0) (nrows x ncols) has pixel centres where the
+ * surfel can reach alpha >= 1/255 (the region of raster_2dgs.h), one lane per row. */
+MGS_VINLINE uint32_t row_bits(const mgs_surf2d *sf, int x0, int y0, int nrows, int ncols) {
+  const v16f lanes = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+  const v16f inf = v16f_set1(INFINITY), rf = v16f_set1(sf->rf);
+  v16f yl = lanes + ((float)y0 + 0.5f - sf->oy);
+  v16f d = yl - sf->yc;
+  v16f hw2 = sf->h0 - sf->kq * (d * d);
+  v16i cv = hw2 >= v16f_set1(0.0f);
+  v16f hw = v16f_sqrt(v16f_and(cv, hw2));
+  v16f xm = sf->xc + sf->sl * d;
+  v16f lo = v16f_select(cv, xm - hw, inf), hi = v16f_select(cv, xm + hw, zero_minus(inf));
+  v16i dv = (yl <= rf) & (yl >= zero_minus(rf));
+  lo = v16f_select(dv, v16f_min(lo, zero_minus(rf)), lo);
+  hi = v16f_select(dv, v16f_max(hi, rf), hi);
+  float xmin = (float)x0 + 0.5f - sf->ox - 0.05f, xmax = (float)(x0 + ncols) - 0.5f - sf->ox + 0.05f;
+  v16i hit = (lo - v16f_set1(1e-3f) * v16f_abs(lo) <= v16f_set1(xmax)) & (hi + v16f_set1(1e-3f) * v16f_abs(hi) >= v16f_set1(xmin));
+  return v16i_bits(hit) & ((1u << nrows) - 1u);
 }
 
 MGS_VINLINE v16f depth_map(v16f z) {
@@ -91,14 +111,14 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
   v16f X;
   v16i outside;
   for (int i = 0; i < 16; i++) { X[i] = (float)(x0 + i) + 0.5f; outside[i] = i < ncols ? 0 : -1; }
-  int rowdone[MGS_TILE_SIZE];
+  uint32_t rowdone = 0; /* bit y: every pixel of row y has terminated */
   for (int y = 0; y < MGS_TILE_SIZE; y++) {
     T[y] = v16f_set1(1.0f);
     for (int a = 0; a < NACC; a++) A[a][y] = v16f_set1(0.0f);
     NC[y] = MID[y] = v16i_set1(0);
     DONE[y] = outside;
-    rowdone[y] = y >= nrows;
   }
+  const mgs_surf2d_cold *cold = mgs_raster2d_cold(r);
   const v16f one = v16f_set1(1.0f), half = v16f_set1(0.5f), tmin = v16f_set1(MGS_T_MIN);
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1], evals = 0;
   const mgs_surf2d *surf = mgs_raster2d_surf(r);
@@ -109,13 +129,13 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
     }
     const mgs_surf2d *sf = &surf[r->isect_idx[j]];
     v16i jid = v16i_set1((int32_t)(j - start + 1));
-    int ylo, yhi;
-    row_span(sf, y0, nrows, &ylo, &yhi);
-    if (ylo > yhi || misses_cols(sf, x0, ncols)) continue;
+    uint32_t rows = row_bits(sf, x0, y0, nrows, ncols) & ~rowdone;
+    if (!rows) continue;
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
-    for (int y = ylo; y <= yhi; y++) {
-      if (rowdone[y]) continue;
+    const mgs_surf2d_cold *cd = geo ? &cold[r->isect_idx[j]] : NULL;
+    for (; rows; rows &= rows - 1) {
+      int y = __builtin_ctz(rows);
       evals++;
       isect_row e;
       isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
@@ -123,7 +143,7 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
       v16f testT = T[y] * (one - e.alpha);
       v16i nd = m & (testT < tmin);
       DONE[y] |= nd;
-      if (v16i_any(nd)) rowdone[y] = !v16i_any(~DONE[y]);
+      if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
       m &= ~nd;
       if (!v16i_any(m)) continue;
       v16f w = v16f_and(m, e.alpha * T[y]);
@@ -137,7 +157,7 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
         v16i med = m & (T[y] > half);
         A[MED][y] = v16f_select(med, e.z, A[MED][y]);
         MID[y] = (med & jid) | (~med & MID[y]);
-        A[N0][y] += w * sf->n[0]; A[N1][y] += w * sf->n[1]; A[N2][y] += w * sf->n[2];
+        A[N0][y] += w * cd->n[0]; A[N1][y] += w * cd->n[1]; A[N2][y] += w * cd->n[2];
       }
       A[DZ][y] += w * e.z;
       A[CR][y] += w * sf->rgb[0]; A[CG][y] += w * sf->rgb[1]; A[CB][y] += w * sf->rgb[2];
@@ -287,13 +307,12 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     v16f PX = zero, PY = zero, PZ = zero, PXY = zero, PYY = zero, PZY = zero, AD = zero, Q2 = zero, Q2Y = zero;
     v16f AOP = zero, AR = zero, AG = zero, AB = zero, AN0 = zero, AN1 = zero, AN2 = zero;
     const v16f cr = v16f_set1(sf->rgb[0]), cg = v16f_set1(sf->rgb[1]), cb = v16f_set1(sf->rgb[2]);
-    const v16f n0 = v16f_set1(sf->n[0]), n1 = v16f_set1(sf->n[1]), n2 = v16f_set1(sf->n[2]);
-    int ylo, yhi;
-    row_span(sf, y0, nrows, &ylo, &yhi);
-    if (misses_cols(sf, x0, ncols)) yhi = -1;
+    const mgs_surf2d_cold *cd = geo ? &mgs_raster2d_cold(r)[r->isect_idx[j]] : NULL;
+    const v16f n0 = v16f_set1(geo ? cd->n[0] : 0.0f), n1 = v16f_set1(geo ? cd->n[1] : 0.0f), n2 = v16f_set1(geo ? cd->n[2] : 0.0f);
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
-    for (int y = ylo; y <= yhi; y++) {
+    for (uint32_t rows = row_bits(sf, x0, y0, nrows, ncols); rows; rows &= rows - 1) {
+      int y = __builtin_ctz(rows);
       if ((int32_t)(j - start) >= rowmax[y]) continue;
       evals++;
       float Y = (float)(y0 + y) + 0.5f;

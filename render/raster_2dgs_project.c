@@ -419,16 +419,16 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
   cam_par_init(r, &cp);
   size_t blk[16];
   float drgb[3][16], dmean[3][16];
-  int nl = 0;
+  int nl = 0, st = mgs_raster2d_slot_stride(r), nc = mgs_raster2d_slot_count(r);
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
     float gs[S2_COUNT] = {0};
-    const float *q = r->sgrad + (size_t)r->gauss_off[i] * S2_STRIDE;
-    for (uint32_t k = 0; k < cnt; k++, q += S2_STRIDE)
-      for (int c = 0; c < S2_COUNT; c++) gs[c] += q[c];
+    const float *q = r->sgrad + (size_t)r->gauss_off[i] * (size_t)st;
+    for (uint32_t k = 0; k < cnt; k++, q += st)
+      for (int c = 0; c < nc; c++) gs[c] += q[c];
     int any = 0;
-    for (int c = 0; c < S2_COUNT; c++) any |= gs[c] != 0;
+    for (int c = 0; c < nc; c++) any |= gs[c] != 0;
     if (!any) continue;
     if (nl && i - blk[0] >= (1u << 24)) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
     float d3[3], m3[3];

@@ -241,6 +241,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
   int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
+  const int st = mgs_raster2d_slot_stride(r); /* S2_STRIDE_MAX exactly when geo */
   if (start == end) { r->tile_evals[tile] = 0; return; }
   enum { GR, GG, GB, GD, GN0, GN1, GN2, GM, GDI, FM1, FM2, FA, K, FM0, NIN };
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], I[NIN][MGS_TILE_SIZE];
@@ -288,17 +289,17 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   const float F = MGS_2DGS_FAR, N = MGS_2DGS_NEAR;
   const v16f dmdz_c = v16f_set1(F * N / (F - N));
   for (uint32_t j = start + (uint32_t)maxn; j < end; j++)
-    memset(r->sgrad + (size_t)r->isect_slot[j] * S2_STRIDE, 0, S2_STRIDE * sizeof(float));
+    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)st * sizeof(float));
   const mgs_surf2d *surf = mgs_raster2d_surf(r);
   uint32_t evals = 0;
   for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
     if (j >= start + 8) { /* random slot and record: fetch ahead */
-      __builtin_prefetch(r->sgrad + (size_t)r->isect_slot[j - 8] * S2_STRIDE, 1);
+      __builtin_prefetch(r->sgrad + (size_t)r->isect_slot[j - 8] * st, 1);
       const char *nx = (const char *)&surf[r->isect_idx[j - 8]];
       __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_surf2d) - 1);
     }
     const mgs_surf2d *sf = &surf[r->isect_idx[j]];
-    float *out = r->sgrad + (size_t)r->isect_slot[j] * S2_STRIDE;
+    float *out = r->sgrad + (size_t)r->isect_slot[j] * st;
     v16i jid = v16i_set1((int32_t)(j - start));
     v16i jid1 = v16i_set1((int32_t)(j - start + 1));
     /* per lane, summed over rows: dL/dp (P*), dL/dp times the row's y - oy (PY*), dL/ddet,
@@ -370,8 +371,10 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     out[S2_OY] = 2.0f * MGS_2DGS_FILTER_INV2 * 0.5f * v16f_sum(Q2Y);
     out[S2_OP] = v16f_sum(AOP);
     out[S2_R] = v16f_sum(AR); out[S2_G] = v16f_sum(AG); out[S2_B] = v16f_sum(AB);
-    out[S2_N] = v16f_sum(AN0); out[S2_N + 1] = v16f_sum(AN1); out[S2_N + 2] = v16f_sum(AN2);
-    for (int c = S2_COUNT; c < S2_STRIDE; c++) out[c] = 0;
+    if (geo) {
+      out[S2_N] = v16f_sum(AN0); out[S2_N + 1] = v16f_sum(AN1); out[S2_N + 2] = v16f_sum(AN2);
+      for (int c = S2_COUNT; c < S2_STRIDE_MAX; c++) out[c] = 0;
+    }
   }
   r->tile_evals[tile] = evals;
 }
@@ -387,7 +390,7 @@ mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, co
   if (r->n_isect > r->cap_sgrad) {
     size_t c = r->n_isect + r->n_isect / 4;
     free(r->sgrad);
-    r->sgrad = aligned_alloc(64, (c ? c : 1) * S2_STRIDE * sizeof(float));
+    r->sgrad = aligned_alloc(64, (c ? c : 1) * S2_STRIDE_MAX * sizeof(float));
     r->cap_sgrad = r->sgrad ? c : 0;
     if (!r->sgrad)
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_tiles.c: out of memory for %zu intersections", r->n_isect);

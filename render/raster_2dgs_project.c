@@ -6,6 +6,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 #include "core/mgs_math.h"
 #include "core/mgs_parallel.h"
 #include "render/raster_2dgs.h"
@@ -130,62 +133,7 @@ static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
   r->radii[i] = (int)radius;
   if (op < MGS_ALPHA_MIN) return 1; /* alpha < 1/255 everywhere: nothing to bin */
-  /* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
-     {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in
-     the pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its
-     quadratic part is positive definite (p.z keeps one sign inside: p = 0 has no pixel);
-     otherwise (a surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax,
-     which already has 0.1 %, and the margins below) so that the float per-pixel rho3 of
-     every pixel it leaves out is above rmax: skipping those pixels changes no value. Tiles
-     of the authors' rect that miss it are not binned (the same result, as 3DGS's binning). */
-  int x0b = x0, y0b = y0, x1b = x1, y1b = y1;
-  {
-    float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
-    double rf = sqrt((double)rmax / MGS_2DGS_FILTER_INV2) * 1.001 + 0.02;
-    double rb = (double)rmax * 1.01 + 1e-3, wq[3] = {1.0, 1.0, -rb}, M[6] = {0};
-    for (int k = 0; k < 3; k++) {
-      double A = sf->c0[k], B = sf->c1[k], C = sf->c2[k];
-      M[0] += wq[k] * A * A; M[1] += wq[k] * A * B; M[2] += wq[k] * B * B;
-      M[3] += wq[k] * A * C; M[4] += wq[k] * B * C; M[5] += wq[k] * C * C;
-    }
-    double det2 = M[0] * M[2] - M[1] * M[1];
-    double xlo = -rf, xhi = rf, ylo = -rf, yhi = rf;
-    double yc = 0, xc = 0, sl = 0, h0 = INFINITY, kq = 0;
-    int bounded = M[0] > 0 && det2 > 0 && isfinite(det2) && isfinite(M[3] + M[4] + M[5]);
-    if (bounded) {
-      xc = (M[4] * M[1] - M[3] * M[2]) / det2;
-      yc = (M[3] * M[1] - M[4] * M[0]) / det2;
-      double qc = M[5] + M[3] * xc + M[4] * yc;
-      if (qc < 0) {
-        h0 = -qc / M[0];
-        kq = det2 / (M[0] * M[0]);
-        sl = -M[1] / M[0];
-        double ex = sqrt(-qc * M[2] / det2), ey = sqrt(-qc * M[0] / det2);
-        xlo = fmin(xlo, xc - ex); xhi = fmax(xhi, xc + ex);
-        ylo = fmin(ylo, yc - ey); yhi = fmax(yhi, yc + ey);
-      } else {
-        h0 = -1; xc = yc = 0; /* no point with rho3 <= rmax: the disc alone */
-      }
-      bounded = isfinite(xc) && isfinite(yc) && isfinite(h0) && isfinite(kq) && isfinite(sl) && isfinite(xlo + xhi + ylo + yhi) &&
-                fabs(xlo) + fabs(xhi) + fabs(ylo) + fabs(yhi) < 1e7;
-    }
-    if (!bounded) { yc = xc = sl = kq = 0; h0 = INFINITY; xlo = ylo = -INFINITY; xhi = yhi = INFINITY; }
-    sf->yc = (float)yc; sf->xc = (float)xc; sf->sl = (float)sl; sf->h0 = (float)h0; sf->kq = (float)kq;
-    sf->rf = (float)rf;
-    sf->pad[0] = sf->pad[1] = 0;
-    double mx = 0.05 + 1e-3 * (xhi - xlo), my = 0.05 + 1e-3 * (yhi - ylo);
-    if (bounded) {
-      x0b = clamp_tile(floor((cx + xlo - mx - 0.5) * ts), r->tiles_x);
-      x1b = clamp_tile(floor((cx + xhi + mx - 0.5) * ts) + 1, r->tiles_x);
-      y0b = clamp_tile(floor((cy + ylo - my - 0.5) * ts), r->tiles_y);
-      y1b = clamp_tile(floor((cy + yhi + my - 0.5) * ts) + 1, r->tiles_y);
-    }
-  }
-  if (x0b > x0) x0 = x0b;
-  if (x1b < x1) x1 = x1b;
-  if (y0b > y0) y0 = y0b;
-  if (y1b < y1) y1 = y1b;
-  if (x1 <= x0 || y1 <= y0) return 1;
+  sf->rf = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
   uint16_t *rc = r->rect + 4 * i;
   rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
   r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
@@ -197,6 +145,94 @@ typedef struct proj_ctx {
   cam_par cp;
   const uint32_t *idx;
 } proj_ctx;
+
+/* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
+ * {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in the
+ * pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its quadratic
+ * part is positive definite (p.z keeps one sign inside: p = 0 has no pixel); otherwise (a
+ * surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax, which already
+ * has 0.1 %, and the margins) so that the float per-pixel rho3 of every pixel it leaves out
+ * is above rmax: skipping those pixels changes no value. Tiles of the authors' rect that
+ * miss it are not binned (the same result, as 3DGS's binning). For the binned surfels
+ * blk[0..nl) (project_one stored rmax in rf), in double, 16 lanes in branch-free loops. */
+typedef double v8d2 __attribute__((vector_size(64)));
+typedef int64_t v8l2 __attribute__((vector_size(64)));
+static inline v8d2 d8_set1(double x) { return (v8d2){x, x, x, x, x, x, x, x}; }
+static inline v8d2 d8_sel(v8l2 m, v8d2 a, v8d2 b) { return (v8d2)((m & (v8l2)a) | (~m & (v8l2)b)); }
+static inline v8d2 d8_sqrt(v8d2 x) {
+#if defined(__AVX512F__)
+  return (v8d2)_mm512_sqrt_pd((__m512d)x);
+#else
+  for (int i = 0; i < 8; i++) x[i] = sqrt(x[i]);
+  return x;
+#endif
+}
+static inline v8d2 d8_abs(v8d2 x) { return (v8d2)((v8l2)x & (v8l2){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}); }
+static inline v8d2 d8_load(const double *p) { v8d2 v; memcpy(&v, p, sizeof v); return v; }
+static inline void d8_store(double *p, v8d2 v) { memcpy(p, &v, sizeof v); }
+
+static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  double A[3][16], B[3][16], C[3][16], rmx[16];
+  for (int l = 0; l < 16; l++) {
+    const mgs_surf2d *sf = surf + blk[l < nl ? l : 0];
+    for (int k = 0; k < 3; k++) { A[k][l] = sf->c0[k]; B[k][l] = sf->c1[k]; C[k][l] = sf->c2[k]; }
+    rmx[l] = sf->rf;
+  }
+  double yc[16], xc[16], sl[16], h0[16], kq[16], rf[16], xlo[16], xhi[16], ylo[16], yhi[16];
+  int64_t bnd[16];
+  for (int h = 0; h < 16; h += 8) {
+    const v8d2 zero = d8_set1(0.0);
+    v8d2 a0 = d8_load(A[0] + h), a1 = d8_load(A[1] + h), a2 = d8_load(A[2] + h);
+    v8d2 b0 = d8_load(B[0] + h), b1 = d8_load(B[1] + h), b2 = d8_load(B[2] + h);
+    v8d2 c0 = d8_load(C[0] + h), c1 = d8_load(C[1] + h), c2 = d8_load(C[2] + h), rm = d8_load(rmx + h);
+    v8d2 rfl = d8_sqrt(rm * (1.0 / MGS_2DGS_FILTER_INV2)) * 1.001 + 0.02, rb = rm * 1.01 + 1e-3;
+    v8d2 M0 = a0 * a0 + a1 * a1 - rb * a2 * a2, M1 = a0 * b0 + a1 * b1 - rb * a2 * b2;
+    v8d2 M2 = b0 * b0 + b1 * b1 - rb * b2 * b2, M3 = a0 * c0 + a1 * c1 - rb * a2 * c2;
+    v8d2 M4 = b0 * c0 + b1 * c1 - rb * b2 * c2, M5 = c0 * c0 + c1 * c1 - rb * c2 * c2;
+    v8d2 det2 = M0 * M2 - M1 * M1, idet = 1.0 / det2, im0 = 1.0 / M0;
+    v8d2 xcl = (M4 * M1 - M3 * M2) * idet, ycl = (M3 * M1 - M4 * M0) * idet;
+    v8d2 qc = M5 + M3 * xcl + M4 * ycl;
+    v8l2 pd = (M0 > zero) & (det2 > zero), el = pd & (qc < zero);
+    v8d2 ex = d8_sqrt(d8_sel(el, zero - qc * M2 * idet, zero)), ey = d8_sqrt(d8_sel(el, zero - qc * M0 * idet, zero));
+    v8d2 hh = d8_sel(el, zero - qc * im0, d8_set1(-1.0)), kk = d8_sel(el, det2 * im0 * im0, zero);
+    v8d2 ss = d8_sel(el, zero - M1 * im0, zero), x_c = d8_sel(el, xcl, zero), y_c = d8_sel(el, ycl, zero);
+    v8d2 nrf = zero - rfl, t;
+    t = xcl - ex; v8d2 xl = d8_sel(el & (t < nrf), t, nrf);
+    t = xcl + ex; v8d2 xh = d8_sel(el & (t > rfl), t, rfl);
+    t = ycl - ey; v8d2 yl = d8_sel(el & (t < nrf), t, nrf);
+    t = ycl + ey; v8d2 yh = d8_sel(el & (t > rfl), t, rfl);
+    v8d2 chk = x_c + y_c + hh + kk + ss + xl + xh + yl + yh;
+    v8l2 ok = pd & (chk - chk == zero) & (d8_abs(xl) + d8_abs(xh) + d8_abs(yl) + d8_abs(yh) < d8_set1(1e7));
+    d8_store(yc + h, d8_sel(ok, y_c, zero)); d8_store(xc + h, d8_sel(ok, x_c, zero));
+    d8_store(sl + h, d8_sel(ok, ss, zero)); d8_store(kq + h, d8_sel(ok, kk, zero));
+    d8_store(h0 + h, d8_sel(ok, hh, d8_set1(INFINITY)));
+    d8_store(rf + h, rfl);
+    d8_store(xlo + h, xl); d8_store(xhi + h, xh); d8_store(ylo + h, yl); d8_store(yhi + h, yh);
+    memcpy(bnd + h, &ok, sizeof ok);
+  }
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    mgs_surf2d *sf = surf + i;
+    sf->yc = (float)yc[l]; sf->xc = (float)xc[l]; sf->sl = (float)sl[l]; sf->h0 = (float)h0[l]; sf->kq = (float)kq[l];
+    sf->rf = (float)rf[l];
+    sf->pad[0] = sf->pad[1] = 0;
+    if (!bnd[l] || !r->count[i]) continue; /* unbounded, or culled by its colour meanwhile */
+    uint16_t *rc = r->rect + 4 * i;
+    double mx = 0.05 + 1e-3 * (xhi[l] - xlo[l]), my = 0.05 + 1e-3 * (yhi[l] - ylo[l]), ts = 1.0 / MGS_TILE_SIZE;
+    int x0 = clamp_tile(floor((sf->ox + xlo[l] - mx - 0.5) * ts), r->tiles_x);
+    int x1 = clamp_tile(floor((sf->ox + xhi[l] + mx - 0.5) * ts) + 1, r->tiles_x);
+    int y0 = clamp_tile(floor((sf->oy + ylo[l] - my - 0.5) * ts), r->tiles_y);
+    int y1 = clamp_tile(floor((sf->oy + yhi[l] + my - 0.5) * ts) + 1, r->tiles_y);
+    if (x0 < rc[0]) x0 = rc[0];
+    if (x1 > rc[2]) x1 = rc[2];
+    if (y0 < rc[1]) y0 = rc[1];
+    if (y1 > rc[3]) y1 = rc[3];
+    if (x1 <= x0 || y1 <= y0) { r->count[i] = 0; continue; }
+    rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
+    r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+  }
+}
 
 /* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
  * 16 at once; a non-finite colour culls its surfel. */
@@ -238,14 +274,19 @@ static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
 
 static void project_range(void *vctx, size_t b, size_t e) {
   const proj_ctx *pc = vctx;
-  size_t blk[16];
-  int nl = 0;
+  size_t blk[16], bb[16];
+  int nl = 0, nb = 0;
   for (size_t k = b; k < e; k++) {
     size_t i = pc->idx ? pc->idx[k] : k;
     if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
-    if (project_one(pc->r, &pc->cp, i)) blk[nl++] = i;
+    if (project_one(pc->r, &pc->cp, i)) {
+      blk[nl++] = i;
+      if (pc->r->count[i]) bb[nb++] = i;
+    }
+    if (nb == 16) { surfel_bounds(pc->r, bb, nb); nb = 0; }
     if (nl == 16) { surfel_colours(pc->r, blk, nl); nl = 0; }
   }
+  if (nb) surfel_bounds(pc->r, bb, nb);
   if (nl) surfel_colours(pc->r, blk, nl);
 }
 

@@ -180,8 +180,11 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
         MID[y] = (med & jid) | (~med & MID[y]);
         A[N0][y] += w * cd->n[0]; A[N1][y] += w * cd->n[1]; A[N2][y] += w * cd->n[2];
       }
-      A[DZ][y] += w * e.z;
-      A[CR][y] += w * sf->rgb[0]; A[CG][y] += w * sf->rgb[1]; A[CB][y] += w * sf->rgb[2];
+      /* (-std=c17 contracts nothing: the fused multiply-adds are explicit) */
+      A[DZ][y] = v16f_fma(w, e.z, A[DZ][y]);
+      A[CR][y] = v16f_fma(w, v16f_set1(sf->rgb[0]), A[CR][y]);
+      A[CG][y] = v16f_fma(w, v16f_set1(sf->rgb[1]), A[CG][y]);
+      A[CB][y] = v16f_fma(w, v16f_set1(sf->rgb[2]), A[CB][y]);
       T[y] = v16f_select(m, testT, T[y]);
       NC[y] = (m & jid) | (~m & NC[y]);
     }
@@ -360,7 +363,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       }
       AR = v16f_fma(w, I[GR][y], AR); AG = v16f_fma(w, I[GG][y], AG); AB = v16f_fma(w, I[GB][y], AB);
       v16f Sy = S[y];
-      v16f dLda = Tn * val - (Sy + I[K][y]) * inv;
+      v16f dLda = v16f_fma(zero - (Sy + I[K][y]), inv, Tn * val);
       S[y] = v16f_fma(val, w, Sy);
       dLda = v16f_and(m & (e.raw < amax), dLda);
       AOP = v16f_fma(e.G, dLda, AOP);
@@ -377,7 +380,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       v16f a = zero - q * e.ipz;
       v16f gpx = v16f_and(use3, a * e.sx), gpy = v16f_and(use3, a * e.sy);
       v16f gz = dLdz * e.ipz;
-      v16f gpz = zero - (v16f_and(use3, a * e.rho3) + gz * zm);
+      v16f gpz = zero - v16f_fma(gz, zm, v16f_and(use3, a * e.rho3));
       v16f yp = v16f_set1(e.yp);
       PX += gpx; PY += gpy; PZ += gpz;
       PXY = v16f_fma(gpx, yp, PXY); PYY = v16f_fma(gpy, yp, PYY); PZY = v16f_fma(gpz, yp, PZY);

@@ -12,6 +12,7 @@
 #include "core/mgs_math.h"
 #include "core/mgs_parallel.h"
 #include "render/raster_2dgs.h"
+#include "render/raster_simd.h"
 
 #define CUTOFF 3.0f
 #define FILTER_SIZE 0.707106f
@@ -278,6 +279,13 @@ static void project_range(void *vctx, size_t b, size_t e) {
   int nl = 0, nb = 0;
   for (size_t k = b; k < e; k++) {
     size_t i = pc->idx ? pc->idx[k] : k;
+    if (!pc->idx && k + 8 < e) { /* the records are written line by line: claim them ahead */
+      const mgs_raster *r = pc->r;
+      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8), 1);
+      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8) + sizeof(mgs_surf2d) - 1, 1);
+      __builtin_prefetch(&r->splat[k + 8], 1);
+      __builtin_prefetch(&r->aux[k + 8], 1);
+    }
     if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
     if (project_one(pc->r, &pc->cp, i)) {
       blk[nl++] = i;
@@ -466,10 +474,17 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
     if (!cnt) continue;
     float gs[S2_COUNT] = {0};
     const float *q = r->sgrad + (size_t)r->gauss_off[i] * (size_t)st;
-    for (uint32_t k = 0; k < cnt; k++, q += st)
-      for (int c = 0; c < nc; c++) gs[c] += q[c];
     int any = 0;
-    for (int c = 0; c < nc; c++) any |= gs[c] != 0;
+    if (nc == 16) { /* one line a slot */
+      v16f acc = v16f_set1(0.0f);
+      for (uint32_t k = 0; k < cnt; k++, q += st) acc += v16f_load(q);
+      v16f_store(gs, acc);
+      any = v16i_any(((v16i)acc << 1) != 0); /* +-0 is no gradient */
+    } else {
+      for (uint32_t k = 0; k < cnt; k++, q += st)
+        for (int c = 0; c < nc; c++) gs[c] += q[c];
+      for (int c = 0; c < nc; c++) any |= gs[c] != 0;
+    }
     if (!any) continue;
     if (nl && i - blk[0] >= (1u << 24)) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
     float d3[3], m3[3];

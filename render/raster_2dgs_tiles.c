@@ -339,6 +339,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     const v16f n0 = v16f_set1(geo ? cd->n[0] : 0.0f), n1 = v16f_set1(geo ? cd->n[1] : 0.0f), n2 = v16f_set1(geo ? cd->n[2] : 0.0f);
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
+    int touched = 0;
     for (uint32_t rows = row_bits(sf, x0, y0, nrows, ncols); rows; rows &= rows - 1) {
       int y = __builtin_ctz(rows);
       if ((int32_t)(j - start) >= rowmax[y]) continue;
@@ -348,6 +349,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       isect_eval(sf, &ic, Y, &e);
       v16i m = e.m & (jid < NC[y]);
       if (!v16i_any(m)) continue;
+      touched = 1;
       v16f inv = v16f_rcp(one - e.alpha);
       v16f Tn = v16f_select(m, T[y] * inv, T[y]);
       T[y] = Tn;
@@ -388,6 +390,10 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       v16f q2 = v16f_and(m & ~use3, q);
       Q2 += q2;
       Q2Y = v16f_fma(q2, yp, Q2Y);
+    }
+    if (!touched) { /* no pixel: a zero slot */
+      memset(out, 0, (size_t)st * sizeof(float));
+      continue;
     }
     /* the 16 sums in slot order, one transposing reduction */
     v16f acc[16] = {PX * ic.xp, PY * ic.xp, PZ * ic.xp, PXY, PYY, PZY, PX, PY, PZ, AD, Q2 * ic.xp, Q2Y, AOP, AR, AG, AB};

@@ -52,7 +52,10 @@ static void usage(FILE *f) {
     "  --no-peer           skip the OpenSplat-matched run (2000 Gaussians, no densification, 1000 it)\n"
     "  --work DIR          where the datasets are made (/tmp/mgs-bench-train)\n"
     "  -o, --output DIR    CSV, tables and plot (bench/train)\n"
-    "  --threads N         worker threads (all cores)\n");
+    "  --threads N         worker threads (all cores)\n"
+    "  --method NAME=ARGS  train NAME as `morsegs train DATA --iters N --seed 1 ARGS` (any train option,\n"
+    "                      e.g. sugar='--preset sugar' or 2dgs='--model 2dgs'); repeatable, up to 8;\n"
+    "                      replaces the default ADC run\n");
 }
 
 static int make_scene(const char *name, const char *dir, int res) {
@@ -64,6 +67,47 @@ static int make_scene(const char *name, const char *dir, int res) {
   snprintf(h, sizeof h, "%d", res);
   char *argv[] = {"scene", "--builtin", (char *)name, "-o", (char *)dir, "--width", w, "--height", h, "-q", "--force", NULL};
   return mgs_cmd_scene(11, argv);
+}
+
+/* Trains t to each of the given iterations, evaluating the test split there. */
+static mgs_status sample_run(mgs_trainer *t, const char *scene, const char *config, int iters, const int *evals,
+                             int n_evals, samples *out, mgs_error *err) {
+  mgs_status st = MGS_OK;
+  double last_s = 0, last_ph[MGS_TRAIN_PHASES] = {0};
+  int last_it = 0;
+  printf("%-8s %-10s %6s %9s %9s %9s %9s %8s %10s   %s\n", "scene", "config", "iter", "time s", "ms/iter", "cpu ms/it",
+         "PSNR", "SSIM", "Gaussians", "ms/iter: fwd loss bwd strategy adam terms");
+  for (int e = 0; e < n_evals && st == MGS_OK; e++) {
+    if (evals[e] > iters) break;
+    clock_t c0 = clock();
+    if ((st = mgs_trainer_run_to(t, evals[e], err))) break; /* the model the reference evaluates at evals[e] */
+    double cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
+    sample s;
+    memset(&s, 0, sizeof s);
+    snprintf(s.scene, sizeof s.scene, "%s", scene);
+    snprintf(s.config, sizeof s.config, "%s", config);
+    s.iteration = mgs_trainer_model_iteration(t);
+    s.seconds = mgs_trainer_seconds(t);
+    int done = mgs_trainer_iteration(t), seg = done - last_it > 0 ? done - last_it : 1;
+    s.ms_per_iter = 1000.0 * (s.seconds - last_s) / (double)seg;
+    s.cpu_ms_per_iter = 1000.0 * cpu / (double)seg;
+    s.gaussians = mgs_trainer_model(t)->n;
+    double ph[MGS_TRAIN_PHASES];
+    mgs_trainer_phase_seconds(t, ph);
+    for (int k = 0; k < MGS_TRAIN_PHASES; k++) {
+      s.phase_ms[k] = 1000.0 * (ph[k] - last_ph[k]) / (double)seg;
+      last_ph[k] = ph[k];
+    }
+    if ((st = mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &s.psnr, &s.ssim, err))) break;
+    last_s = s.seconds;
+    last_it = done;
+    printf("%-8s %-10s %6d %9.1f %9.2f %9.2f %9.3f %8.4f %10zu   %.1f %.1f %.1f %.1f %.1f %.1f\n", s.scene, s.config,
+           s.iteration, s.seconds, s.ms_per_iter, s.cpu_ms_per_iter, s.psnr, s.ssim, s.gaussians, s.phase_ms[0], s.phase_ms[1],
+           s.phase_ms[2], s.phase_ms[3], s.phase_ms[4], s.phase_ms[5]);
+    fflush(stdout);
+    push(out, &s);
+  }
+  return st;
 }
 
 /* Trains one configuration, evaluating the test split at the given iterations. */
@@ -93,42 +137,54 @@ static mgs_status run_config(const char *scene, const char *config, const char *
   }
   mgs_trainer *t = NULL;
   if (st == MGS_OK) st = mgs_trainer_create(ds, &to, g, densify ? mgs_strategy_adc_create(&to.adc) : NULL, &t, err);
-  double last_s = 0, last_ph[MGS_TRAIN_PHASES] = {0};
-  int last_it = 0;
-  printf("%-8s %-10s %6s %9s %9s %9s %9s %8s %10s   %s\n", "scene", "config", "iter", "time s", "ms/iter", "cpu ms/it",
-         "PSNR", "SSIM", "Gaussians", "ms/iter: fwd loss bwd strategy adam");
-  for (int e = 0; e < n_evals && st == MGS_OK; e++) {
-    if (evals[e] > iters) break;
-    clock_t c0 = clock();
-    if ((st = mgs_trainer_run_to(t, evals[e], err))) break; /* the model the reference evaluates at evals[e] */
-    double cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
-    sample s;
-    memset(&s, 0, sizeof s);
-    snprintf(s.scene, sizeof s.scene, "%s", scene);
-    snprintf(s.config, sizeof s.config, "%s", config);
-    s.iteration = mgs_trainer_model_iteration(t);
-    s.seconds = mgs_trainer_seconds(t);
-    int done = mgs_trainer_iteration(t), seg = done - last_it > 0 ? done - last_it : 1;
-    s.ms_per_iter = 1000.0 * (s.seconds - last_s) / (double)seg;
-    s.cpu_ms_per_iter = 1000.0 * cpu / (double)seg;
-    s.gaussians = mgs_trainer_model(t)->n;
-    double ph[MGS_TRAIN_PHASES];
-    mgs_trainer_phase_seconds(t, ph);
-    for (int k = 0; k < MGS_TRAIN_PHASES; k++) {
-      s.phase_ms[k] = 1000.0 * (ph[k] - last_ph[k]) / (double)seg;
-      last_ph[k] = ph[k];
-    }
-    if ((st = mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &s.psnr, &s.ssim, err))) break;
-    last_s = s.seconds;
-    last_it = done;
-    printf("%-8s %-10s %6d %9.1f %9.2f %9.2f %9.3f %8.4f %10zu   %.1f %.1f %.1f %.1f %.1f\n", s.scene, s.config, s.iteration,
-           s.seconds, s.ms_per_iter, s.cpu_ms_per_iter, s.psnr, s.ssim, s.gaussians, s.phase_ms[0], s.phase_ms[1], s.phase_ms[2],
-           s.phase_ms[3], s.phase_ms[4]);
-    fflush(stdout);
-    push(out, &s);
-  }
+  if (st == MGS_OK) st = sample_run(t, scene, config, iters, evals, n_evals, out, err);
   mgs_trainer_destroy(t);
   mgs_dataset_destroy(ds);
+  return st;
+}
+
+/* Trains one method as `morsegs train DIR --iters N --seed 1 ARGS` would (the one option
+ * table and the trainer setup of the train command; nothing is written). */
+static mgs_status run_method(const char *scene, const char *name, const char *args, const char *dir, const char *work,
+                             int iters, const int *evals, int n_evals, samples *out, mgs_error *err) {
+  char *words = mgs_strdup(args), its[16], run[PATH_MAX];
+  if (!words) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  snprintf(its, sizeof its, "%d", iters);
+  snprintf(run, sizeof run, "%s/run-%s", work, name);
+  char *argv[96] = {"train", (char *)dir, "-o", run, "--iters", its, "--seed", "1"};
+  int argc = 8;
+  for (char *w = strtok(words, " \t"); w; w = strtok(NULL, " \t")) {
+    if (argc == 95) { free(words); return mgs_error_set(err, MGS_ERR_ARG, "--method %s: too many words", name); }
+    argv[argc++] = w;
+  }
+  mgs_train_config c;
+  const char *data = NULL;
+  mgs_status st = mgs_config_parse(&c, argc, argv, &data, err);
+  if (st == MGS_OK) st = mgs_config_validate(&c, 1, err);
+  mgs_dataset *ds = NULL;
+  if (st == MGS_OK) {
+    mgs_dataset_options dopt;
+    mgs_config_dataset_options(&c, &dopt);
+    dopt.load_images = 1;
+    st = mgs_dataset_load(dir, &dopt, &ds, err);
+  }
+  mgs_train_setup su = {0};
+  if (st == MGS_OK) {
+    mgs_train_options o;
+    mgs_config_train_options(&c, &o);
+    o.progress = 0;
+    o.checkpoint_every = 0;
+    st = mgs_train_setup_create(&c, ds, &o, NULL, 0, &su, err);
+  }
+  if (st == MGS_OK) st = sample_run(su.trainer, scene, name, c.iters, evals, n_evals, out, err);
+  if (st && !strstr(err->msg, "--method")) {
+    char m[sizeof err->msg];
+    snprintf(m, sizeof m, "%s", err->msg);
+    mgs_error_set(err, st, "--method %s: %s", name, m);
+  }
+  if (su.trainer) mgs_train_setup_destroy(&su);
+  mgs_dataset_destroy(ds);
+  free(words);
   return st;
 }
 
@@ -200,9 +256,11 @@ int mgs_bench_train(int argc, char **argv) {
                                        {"no-peer", no_argument, 0, 'P'}, {"random", required_argument, 0, 'R'},
                                        {"no-densify", no_argument, 0, 'D'}, {"work", required_argument, 0, 'w'},
                                        {"output", required_argument, 0, 'o'}, {"threads", required_argument, 0, 't'},
-                                       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+                                       {"method", required_argument, 0, 'm'}, {"help", no_argument, 0, 'h'},
+                                       {0, 0, 0, 0}};
   int full = 0, iters = 0, res = 200, peer = 1, threads = 0, random_n = 0, densify = 1, c;
-  const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train";
+  const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train", *methods[8];
+  int n_methods = 0;
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     switch (c) {
@@ -216,6 +274,15 @@ int mgs_bench_train(int argc, char **argv) {
       case 'w': work = optarg; break;
       case 'o': out = optarg; break;
       case 't': threads = atoi(optarg); break;
+      case 'm': {
+        const char *eq = strchr(optarg, '=');
+        if (!eq || eq == optarg || eq - optarg > 31 || n_methods == 8) {
+          fprintf(stderr, "morsegs bench train: --method needs NAME=ARGS (NAME 1-31 characters, at most 8 methods): '%s'\n", optarg);
+          return 2;
+        }
+        methods[n_methods++] = optarg;
+        break;
+      }
       case 'h': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
@@ -243,6 +310,13 @@ int mgs_bench_train(int argc, char **argv) {
     char dir[PATH_MAX];
     snprintf(dir, sizeof dir, "%s/%s_%d", work, tok, res);
     if (make_scene(tok, dir, res) != 0) { st = mgs_error_set(&err, MGS_ERR_ARG, "cannot make the built-in scene '%s'", tok); break; }
+    for (int m = 0; m < n_methods && st == MGS_OK; m++) {
+      char name[32];
+      const char *eq = strchr(methods[m], '=');
+      snprintf(name, sizeof name, "%.*s", (int)(eq - methods[m]), methods[m]);
+      st = run_method(tok, name, eq + 1, dir, work, iters, my_evals, nm, &ss, &err);
+    }
+    if (n_methods || st) continue;
     char cfgname[32];
     snprintf(cfgname, sizeof cfgname, "%s%s", densify ? "adc" : "fixed", random_n ? "-random" : "");
     st = run_config(tok, cfgname, dir, iters, random_n, random_n > 0, densify, my_evals, nm, &ss, &err);
@@ -261,22 +335,22 @@ int mgs_bench_train(int argc, char **argv) {
   snprintf(path, sizeof path, "%s/train.csv", out);
   FILE *f = fopen(path, "w");
   if (f) {
-    fprintf(f, "scene,config,iteration,train_seconds,ms_per_iter,cpu_ms_per_iter,gaussians,test_psnr,test_ssim,fwd_ms,loss_ms,bwd_ms,strategy_ms,adam_ms\n");
+    fprintf(f, "scene,config,iteration,train_seconds,ms_per_iter,cpu_ms_per_iter,gaussians,test_psnr,test_ssim,fwd_ms,loss_ms,bwd_ms,strategy_ms,adam_ms,terms_ms\n");
     for (size_t i = 0; i < ss.n; i++)
-      fprintf(f, "%s,%s,%d,%.3f,%.3f,%.3f,%zu,%.4f,%.5f,%.3f,%.3f,%.3f,%.3f,%.3f\n", ss.s[i].scene, ss.s[i].config, ss.s[i].iteration,
+      fprintf(f, "%s,%s,%d,%.3f,%.3f,%.3f,%zu,%.4f,%.5f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", ss.s[i].scene, ss.s[i].config, ss.s[i].iteration,
               ss.s[i].seconds, ss.s[i].ms_per_iter, ss.s[i].cpu_ms_per_iter, ss.s[i].gaussians, ss.s[i].psnr, ss.s[i].ssim, ss.s[i].phase_ms[0],
-              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4]);
+              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].phase_ms[5]);
     fclose(f);
   }
   snprintf(path, sizeof path, "%s/train.md", out);
   f = fopen(path, "w");
   if (f) {
-    fprintf(f, "| scene | config | iteration | train time (s) | ms/iteration (segment) | CPU ms/iteration (all threads) | fwd / loss / bwd / strategy / Adam ms | Gaussians | test PSNR (dB) | test SSIM |\n");
+    fprintf(f, "| scene | config | iteration | train time (s) | ms/iteration (segment) | CPU ms/iteration (all threads) | fwd / loss / bwd / strategy / Adam / terms ms | Gaussians | test PSNR (dB) | test SSIM |\n");
     fprintf(f, "|---|---|---|---|---|---|---|---|---|---|\n");
     for (size_t i = 0; i < ss.n; i++)
-      fprintf(f, "| %s | %s | %d | %.1f | %.2f | %.2f | %.1f / %.1f / %.1f / %.1f / %.1f | %zu | %.2f | %.4f |\n", ss.s[i].scene,
+      fprintf(f, "| %s | %s | %d | %.1f | %.2f | %.2f | %.1f / %.1f / %.1f / %.1f / %.1f / %.1f | %zu | %.2f | %.4f |\n", ss.s[i].scene,
               ss.s[i].config, ss.s[i].iteration, ss.s[i].seconds, ss.s[i].ms_per_iter, ss.s[i].cpu_ms_per_iter, ss.s[i].phase_ms[0],
-              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].gaussians,
+              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].phase_ms[5], ss.s[i].gaussians,
               ss.s[i].psnr, ss.s[i].ssim);
     fclose(f);
   }

@@ -95,6 +95,8 @@ static void usage(FILE *f) {
     "                         spaces; listed in --variants when that is given)\n"
     "      --sweep-variants LIST  variants swept (default: baseline,morse-d,morse-full)\n"
     "      --sweep-seeds N    seeds per sweep point (--seeds: H3's Pareto front uses every seed)\n"
+    "      --base V=B         measure variant V's changes against variant B instead of baseline (MorseGS\n"
+    "                         on another method: --variant 2dgs=--model 2dgs --base morse-2dgs=2dgs)\n"
     "      --knob V=FLAG:VAL  the knob of variant V is `FLAG` with default VAL (e.g. morse-d=--gap-max:0.05)\n"
     "      --train-arg ARG    extra argument for every `morsegs train` (repeatable, e.g. --train-arg=--sh-degree=1)\n"
     "      --eval-views N     evaluate at most N test views (all)\n"
@@ -491,7 +493,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -501,13 +503,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
-    {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"base", required_argument, 0, O_BASE}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
   e.iters = 30000; e.seeds = 3; e.sweep_seeds = 0; e.topo_res = EXP_TOPO_RES; /* sweep_seeds 0: as --seeds */
   int n_evals = 4, rc = 1, lock_fd = -1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
-  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0};
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0};
   variant_def custom_defs[16];
   char custom_buf[16][512];
   size_t n_custom = 0;
@@ -518,6 +520,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case 'o': e.dir = optarg; break;
       case O_VARIANTS: variants = optarg; break;
       case O_VARIANT: sl_push(&custom, optarg); break;
+      case O_BASE: sl_push(&bases, optarg); break;
       case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
@@ -632,6 +635,21 @@ int mgs_cmd_experiment(int argc, char **argv) {
     int found = 0;
     for (size_t k = 0; k < e.n_vars; k++) found |= !strcmp(svlist.v[i], e.vars[k].def->name);
     if (!found) { fprintf(stderr, "morsegs experiment: --sweep-variants: '%s' is not among --variants\n", svlist.v[i]); goto usage_fail; }
+  }
+  /* --base V=B: V's changes are measured against B (a method MorseGS sits on), not baseline */
+  for (size_t i = 0; i < bases.n; i++) {
+    char *eq = strchr(bases.v[i], '=');
+    if (!eq || eq == bases.v[i] || !eq[1]) { fprintf(stderr, "morsegs experiment: --base needs VARIANT=BASE (got '%s')\n", bases.v[i]); goto usage_fail; }
+    *eq = 0;
+    variant_sel *v = NULL;
+    int base_found = 0;
+    for (size_t k = 0; k < e.n_vars; k++) {
+      if (!strcmp(e.vars[k].def->name, bases.v[i])) v = &e.vars[k];
+      base_found |= !strcmp(e.vars[k].def->name, eq + 1);
+    }
+    if (!v || !base_found) { fprintf(stderr, "morsegs experiment: --base %s=%s: '%s' is not among --variants\n", bases.v[i], eq + 1, v ? eq + 1 : bases.v[i]); goto usage_fail; }
+    if (!strcmp(bases.v[i], eq + 1) || !strcmp(bases.v[i], "baseline")) { fprintf(stderr, "morsegs experiment: --base %s=%s: a variant cannot be its own base, nor can baseline have one\n", bases.v[i], eq + 1); goto usage_fail; }
+    snprintf(v->status.base, sizeof v->status.base, "%s", eq + 1);
   }
   for (size_t i = 0; i < knobs.n; i++) {
     char *eq = strchr(knobs.v[i], '='), *colon = eq ? strrchr(eq, ':') : NULL;
@@ -840,7 +858,7 @@ fail:
   free(e.runs);
   free(e.command_line);
   sl_free(&e.train_args);
-  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases);
   if (lock_fd >= 0) close(lock_fd);
   mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;

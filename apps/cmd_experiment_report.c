@@ -31,7 +31,7 @@
 
 #define EXP_LEVEL 0.95      /* interval level and Holm's α = 1 − this */
 #define EXP_BOOT 4000       /* bootstrap resamples (JSON only) */
-#define EXP_BASE "baseline" /* every variant sits on 3DGS so far */
+#define EXP_BASE "baseline" /* what a variant is measured against unless --base names another */
 
 typedef enum measure { M_CHAMFER, M_FLOATERS, M_FLOATER_MASS, M_GAUSSIANS, M_PSNR, M_SSIM } measure;
 
@@ -153,17 +153,25 @@ static mgs_status variant_front(const exp_report_in *in, const char *ds, const c
   return MGS_OK;
 }
 
+/* The variant var's changes are measured against (--base V=B; baseline otherwise). */
+static const char *base_of(const exp_report_in *in, const char *var) {
+  for (size_t v = 0; v < in->n_variants; v++)
+    if (!strcmp(in->variants[v].name, var) && in->variants[v].base[0]) return in->variants[v].base;
+  return EXP_BASE;
+}
+
 /* The cell of hypothesis h for variant var on dataset ds (before Holm). */
 static mgs_status compute_cell(const exp_report_in *in, const char *ds, const char *var, const hyp_def *h, exp_cell *c,
                                mgs_error *err) {
   memset(c, 0, sizeof *c);
   c->computed = 1;
   c->p_holm = c->holm_level = c->holm_lo = c->holm_hi = NAN;
+  const char *base = base_of(in, var);
   double ch[64], bvals[64];
   int n = 0, nb = 0;
   mgs_stats_point vpts[64];
   for (int s = 0; s < 64; s++) {
-    const exp_run *b = find_run(in, ds, EXP_BASE, s, 1.0), *r = find_run(in, ds, var, s, 1.0);
+    const exp_run *b = find_run(in, ds, base, s, 1.0), *r = find_run(in, ds, var, s, 1.0);
     double mb = b ? metric(b, h->what) : NAN;
     if (b && isfinite(mb)) bvals[nb++] = mb;
     if (h->front) {
@@ -178,7 +186,7 @@ static mgs_status compute_cell(const exp_report_in *in, const char *ds, const ch
   c->base_sd = sd_of(bvals, nb);
   mgs_stats_point *front = NULL;
   if (h->front) {
-    mgs_status st = variant_front(in, ds, EXP_BASE, &front, &c->front_n, err);
+    mgs_status st = variant_front(in, ds, base, &front, &c->front_n, err);
     if (st) return st;
     mgs_stats_front_changes(front, c->front_n, vpts, (size_t)n, ch, &c->tally);
     free(front);
@@ -190,7 +198,7 @@ static mgs_status compute_cell(const exp_report_in *in, const char *ds, const ch
 #define NOTE(...) do { if (l < sizeof c->note) l += (size_t)snprintf(c->note + l, sizeof c->note - l, __VA_ARGS__); } while (0)
   if (h->front) {
     const mgs_stats_front_tally *t = &c->tally;
-    if (c->front_n == 0) NOTE("no %s sweep to compare with", EXP_BASE);
+    if (c->front_n == 0) NOTE("no %s sweep to compare with", base);
     else if (t->below + t->above) {
       NOTE("%d of %d seeds outside the front's PSNR range (%d below, %d above)", t->below + t->above, n, t->below, t->above);
     }
@@ -566,14 +574,17 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
           in->n_runs, in->planned_runs, in->iters, in->seeds);
   fprintf(f, "Load average (1 min) when the experiment started: %.2f; wall times are taken under whatever load the machine "
              "had (2 cores shared).\n\n", in->load_start);
-  fprintf(f, "## Variants\n\n| variant | status | note |\n|---|---|---|\n");
+  fprintf(f, "## Variants\n\n| variant | measured against | status | note |\n|---|---|---|---|\n");
   cJSON *jv = cJSON_AddArrayToObject(root, "variants");
   for (size_t v = 0; v < in->n_variants; v++) {
-    fprintf(f, "| %s | %s | %s |\n", in->variants[v].name, in->variants[v].status, in->variants[v].reason);
+    fprintf(f, "| %s | %s | %s | %s |\n", in->variants[v].name,
+            strcmp(in->variants[v].name, EXP_BASE) ? base_of(in, in->variants[v].name) : "(the reference)",
+            in->variants[v].status, in->variants[v].reason);
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "name", in->variants[v].name);
     cJSON_AddStringToObject(o, "status", in->variants[v].status);
     cJSON_AddStringToObject(o, "reason", in->variants[v].reason);
+    cJSON_AddStringToObject(o, "base", base_of(in, in->variants[v].name));
     cJSON_AddItemToArray(jv, o);
   }
   fprintf(f, "\nH3 knob sweep: %s\n\n", in->knob_desc && in->knob_desc[0] ? in->knob_desc : "none");
@@ -651,7 +662,9 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       cJSON_AddItemToArray(jvars, ov);
       cJSON_AddStringToObject(ov, "name", var);
       cJSON_AddStringToObject(ov, "status", in->variants[v].status);
-      fprintf(f, "| %s |", var);
+      if (strcmp(base_of(in, var), EXP_BASE)) fprintf(f, "| %s (against %s) |", var, base_of(in, var));
+      else fprintf(f, "| %s |", var);
+      cJSON_AddStringToObject(ov, "base", base_of(in, var));
       if (!strcmp(in->variants[v].status, "not available") || !strcmp(in->variants[v].status, "pending")) {
         for (size_t h = 0; h < N_HYPS; h++) fprintf(f, " %s |", in->variants[v].status);
         fprintf(f, "\n");
@@ -763,6 +776,21 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       }
       free(front);
     }
+    for (size_t v = 0; v < in->n_variants && st == MGS_OK; v++) { /* the other bases' fronts (--base) */
+      const char *b = in->variants[v].name;
+      int is_base = 0;
+      for (size_t w = 0; w < in->n_variants; w++) is_base |= !strcmp(base_of(in, in->variants[w].name), b);
+      if (!is_base || !strcmp(b, EXP_BASE)) continue;
+      mgs_stats_point *front = NULL;
+      size_t nf = 0;
+      if ((st = variant_front(in, ds, b, &front, &nf, err))) break;
+      fprintf(f, "\nThe Pareto front of %s (what H3 compares the variants measured against it with): ", b);
+      if (!nf) fprintf(f, "none.\n");
+      for (size_t k = 0; k < nf; k++) fprintf(f, "%s%.0f Gaussians at %.3f dB", k ? ", " : "", front[k].count, front[k].psnr);
+      fprintf(f, "%s", nf ? ".\n" : "");
+      free(front);
+    }
+    if (st) break;
     fprintf(f, "\n### Curves\n\nCSV: [curves.csv](curves.csv) (every evaluation point), [h3.csv](h3.csv).\n\n");
     static const char *pl[4][2] = {{"psnr_time", "PSNR against wall time"}, {"chamfer_time", "Chamfer against wall time"},
                                    {"bottleneck_time", "bottleneck distance against wall time"},
@@ -921,12 +949,14 @@ mgs_status exp_report_from_results(const char *from, const char *out, const char
   }
   for (size_t v = 0; v < nv && !st; v++) {
     const cJSON *o = cJSON_GetArrayItem(jvs, (int)v), *nm = cJSON_GetObjectItem(o, "name"), *s = cJSON_GetObjectItem(o, "status"),
-                *rs = cJSON_GetObjectItem(o, "reason");
+                *rs = cJSON_GetObjectItem(o, "reason"), *bs = cJSON_GetObjectItem(o, "base");
     if (!cJSON_IsString(nm)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: variant %zu has no name", jp, v); break; }
     if (variants && strcmp(nm->valuestring, EXP_BASE) && !in_list(variants, nm->valuestring)) continue;
     snprintf(vs[kv].name, sizeof vs[kv].name, "%s", nm->valuestring);
     snprintf(vs[kv].status, sizeof vs[kv].status, "%s", cJSON_IsString(s) ? s->valuestring : "available");
     snprintf(vs[kv].reason, sizeof vs[kv].reason, "%s", cJSON_IsString(rs) ? rs->valuestring : "");
+    if (cJSON_IsString(bs) && strcmp(bs->valuestring, EXP_BASE) && strcmp(bs->valuestring, nm->valuestring))
+      snprintf(vs[kv].base, sizeof vs[kv].base, "%s", bs->valuestring);
     kv++;
   }
   if (!st) st = mgs_mkdir_p(out, err);

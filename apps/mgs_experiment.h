@@ -15,6 +15,7 @@ typedef struct exp_variant_status {
   char name[EXP_NAME];
   char status[16];             /* "available", "not available", "failed", "pending" */
   char reason[1024];
+  char base[EXP_NAME];         /* the variant its changes are measured against ("" = baseline) */
 } exp_variant_status;
 
 typedef struct exp_report_in {

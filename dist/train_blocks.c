@@ -429,7 +429,7 @@ static int check_run(const mgs_train_config *mo, int rank, int size, char *msg, 
       char *text = NULL;
       size_t n = 0;
       int was = 0;
-      if (mgs_read_file(layout, &text, &n, &err)) { snprintf(msg, cap, "%s: nothing to resume (%s)", mo->output, err.msg); bad = 1; }
+      if (mgs_read_file(layout, &text, &n, &err)) { snprintf(msg, cap, "%.2047s: nothing to resume (%.1023s)", mo->output, err.msg); bad = 1; }
       else if (sscanf(text, "ranks %d", &was) != 1 || was < 1) { snprintf(msg, cap, "%s: not a layout file", layout); bad = 1; }
       else if (was != size) { snprintf(msg, cap, "%s was trained on %d ranks: resume it with mpirun -np %d (not %d)", mo->output, was, was, size); bad = 1; }
       free(text);

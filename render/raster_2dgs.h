@@ -23,7 +23,8 @@ typedef struct mgs_surf2d {
      (h0 < 0: no pixel; h0 = inf, kq = 0: an unbounded conic, every column); the filter's
      disc {rho2 <= rmax} lies in the square |x - ox|, |y - oy| <= rf. */
   float yc, xc, sl, h0, kq, rf;
-  float pad[2];
+  float zc;                  /* the centre's depth (Tw2): the depth where the filter wins */
+  float pad;
 } mgs_surf2d;
 
 /* What only the maps pass and the per-surfel backward read. */
@@ -40,11 +41,10 @@ static inline mgs_surf2d_cold *mgs_raster2d_cold(const mgs_raster *r) {
 }
 
 /* Slot of one (surfel, tile) intersection: the tile's pixel sums of dL/d(c0, c1, c2, det,
- * ox, oy as the filter centre, opacity, rgb, n). 16 floats (one 64-byte line: the slots
- * are written in random order) when the backward had no map gradients (n's sums are all
- * 0 then), S2_STRIDE_MAX with them. */
-enum { S2_C0 = 0, S2_C1 = 3, S2_C2 = 6, S2_DET = 9, S2_OX, S2_OY, S2_OP, S2_R, S2_G, S2_B, S2_N, S2_COUNT = S2_N + 3 };
+ * ox, oy as the filter centre, opacity, rgb, zc, n); n's only while the map gradients are
+ * live (all 0 otherwise). */
+enum { S2_C0 = 0, S2_C1 = 3, S2_C2 = 6, S2_DET = 9, S2_OX, S2_OY, S2_OP, S2_R, S2_G, S2_B, S2_ZC, S2_N, S2_COUNT = S2_N + 3 };
 #define S2_STRIDE_MAX 32
-static inline int mgs_raster2d_slot_stride(const mgs_raster *r) { return r->s_grad_live ? S2_STRIDE_MAX : 16; }
+static inline int mgs_raster2d_slot_stride(const mgs_raster *r) { (void)r; return S2_STRIDE_MAX; }
 static inline int mgs_raster2d_slot_count(const mgs_raster *r) { return r->s_grad_live ? S2_COUNT : S2_N; }
 #endif

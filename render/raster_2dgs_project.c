@@ -113,6 +113,7 @@ static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return 0;
   sf->ox = cx;
   sf->oy = cy;
+  sf->zc = Tw[2];
   surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
   /* the reference's getRect, in its pixel coordinates (centres at integers) */
   double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
@@ -217,7 +218,7 @@ static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
     mgs_surf2d *sf = surf + i;
     sf->yc = (float)yc[l]; sf->xc = (float)xc[l]; sf->sl = (float)sl[l]; sf->h0 = (float)h0[l]; sf->kq = (float)kq[l];
     sf->rf = (float)rf[l];
-    sf->pad[0] = sf->pad[1] = 0;
+    sf->pad = 0;
     if (!bnd[l] || !r->count[i]) continue; /* unbounded, or culled by its colour meanwhile */
     uint16_t *rc = r->rect + 4 * i;
     double mx = 0.05 + 1e-3 * (xhi[l] - xlo[l]), my = 0.05 + 1e-3 * (yhi[l] - ylo[l]), ts = 1.0 / MGS_TILE_SIZE;
@@ -346,6 +347,7 @@ static void coeffs_backward(const float Tu[3], const float Tv[3], const float Tw
     dTv[k] = (float)dv[k];
     dTw[k] = (float)(dw[k] - ox * du[k] - oy * dv[k]);
   }
+  dTw[2] += gs[S2_ZC]; /* the filter's depth is Tw2 */
 }
 
 /* Backward of one binned surfel but its colour: gs = its summed slots; out: dL/d(unclamped
@@ -475,7 +477,7 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
     float gs[S2_COUNT] = {0};
     const float *q = r->sgrad + (size_t)r->gauss_off[i] * (size_t)st;
     int any = 0;
-    if (nc == 16) { /* one line a slot */
+    if (nc == 16) { /* no such layout now (S2_N > 16): kept for a 16-float slot */
       v16f acc = v16f_set1(0.0f);
       for (uint32_t k = 0; k < cnt; k++, q += st) acc += v16f_load(q);
       v16f_store(gs, acc);

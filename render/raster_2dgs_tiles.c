@@ -31,6 +31,7 @@ MGS_VINLINE void isect_cols_init(const mgs_surf2d *sf, v16f X, isect_cols *c) {
 
 typedef struct isect_row {
   v16f ipz, sx, sy, rho3, rho2, z, G, raw, alpha;
+  v16i use3;  /* rho3 <= rho2: the ray-splat distance wins (else the filter, depth zc) */
   float yp;   /* pixel centre y - oy */
   v16i m;     /* valid: p.z != 0, z >= near, alpha >= 1/255 */
 } isect_row;
@@ -49,7 +50,10 @@ MGS_VINLINE void isect_eval(const mgs_surf2d *sf, const isect_cols *c, float Y, 
   o->rho3 = v16f_fma(o->sx, o->sx, o->sy * o->sy);
   o->rho2 = c->rx2 + MGS_2DGS_FILTER_INV2 * (yp * yp);
   v16f rho = v16f_min(o->rho3, o->rho2);
-  o->z = sf->det * o->ipz;
+  o->use3 = o->rho3 <= o->rho2;
+  /* where the screen-space filter wins the depth is the centre's (as the authors': an
+     edge-on surfel's ray-plane intersection lies arbitrarily far away) */
+  o->z = v16f_select(o->use3, sf->det * o->ipz, v16f_set1(sf->zc));
   o->G = v16f_exp_neg(v16f_set1(-0.5f) * rho);
   o->raw = v16f_set1(sf->opacity) * o->G;
   o->alpha = v16f_min(v16f_set1(MGS_ALPHA_MAX), o->raw);
@@ -316,7 +320,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   v16f slot_fac = one;
   slot_fac[S2_OX] = slot_fac[S2_OY] = MGS_2DGS_FILTER_INV2;
   for (uint32_t j = start + (uint32_t)maxn; j < end; j++)
-    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)st * sizeof(float));
+    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)(geo ? S2_COUNT : S2_N) * sizeof(float));
   const mgs_surf2d *surf = mgs_raster2d_surf(r);
   uint32_t evals = 0;
   for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
@@ -333,7 +337,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
        dL/drho2 (times -1/2: Q2) and Q2 (y - oy); the column factor x - ox is the same in
        every row, applied once at the end */
     v16f PX = zero, PY = zero, PZ = zero, PXY = zero, PYY = zero, PZY = zero, AD = zero, Q2 = zero, Q2Y = zero;
-    v16f AOP = zero, AR = zero, AG = zero, AB = zero, AN0 = zero, AN1 = zero, AN2 = zero;
+    v16f AOP = zero, AR = zero, AG = zero, AB = zero, AZC = zero, AN0 = zero, AN1 = zero, AN2 = zero;
     const v16f cr = v16f_set1(sf->rgb[0]), cg = v16f_set1(sf->rgb[1]), cb = v16f_set1(sf->rgb[2]);
     const mgs_surf2d_cold *cd = geo ? &mgs_raster2d_cold(r)[r->isect_idx[j]] : NULL;
     const v16f n0 = v16f_set1(geo ? cd->n[0] : 0.0f), n1 = v16f_set1(geo ? cd->n[1] : 0.0f), n2 = v16f_set1(geo ? cd->n[2] : 0.0f);
@@ -377,11 +381,12 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
         dLdz += v16f_and(m & (MID[y] == jid1), I[GM][y]) + 2.0f * w * (md * I[FA][y] - I[FM1][y]) * I[GDI][y] * dmdz_c * iz * iz;
         dLdz = v16f_and(m, dLdz);
       }
-      v16i use3 = m & (e.rho3 <= e.rho2);
+      v16i use3 = m & e.use3;
       /* rho3 = |p.xy|^2 / p.z^2, z = det / p.z */
       v16f a = zero - q * e.ipz;
       v16f gpx = v16f_and(use3, a * e.sx), gpy = v16f_and(use3, a * e.sy);
-      v16f gz = dLdz * e.ipz;
+      v16f gz = v16f_and(use3, dLdz * e.ipz); /* the filter's depth zc: no path through p */
+      AZC += v16f_and(m & ~use3, dLdz);
       v16f gpz = zero - v16f_fma(gz, zm, v16f_and(use3, a * e.rho3));
       v16f yp = v16f_set1(e.yp);
       PX += gpx; PY += gpy; PZ += gpz;
@@ -392,15 +397,16 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       Q2Y = v16f_fma(q2, yp, Q2Y);
     }
     if (!touched) { /* no pixel: a zero slot */
-      memset(out, 0, (size_t)st * sizeof(float));
+      memset(out, 0, (size_t)(geo ? S2_COUNT : S2_N) * sizeof(float));
       continue;
     }
     /* the 16 sums in slot order, one transposing reduction */
     v16f acc[16] = {PX * ic.xp, PY * ic.xp, PZ * ic.xp, PXY, PYY, PZY, PX, PY, PZ, AD, Q2 * ic.xp, Q2Y, AOP, AR, AG, AB};
     v16f_store(out, v16f_sum16(acc) * slot_fac);
+    out[S2_ZC] = v16f_sum(AZC);
     if (geo) {
       out[S2_N] = v16f_sum(AN0); out[S2_N + 1] = v16f_sum(AN1); out[S2_N + 2] = v16f_sum(AN2);
-      for (int c = S2_COUNT; c < S2_STRIDE_MAX; c++) out[c] = 0;
+
     }
   }
   r->tile_evals[tile] = evals;

@@ -72,8 +72,7 @@ static void blend_tile(mgs_raster *r, size_t tile) {
     DONE[y] = outside;
     rowdone[y] = 0;
   }
-  const v16f amax = v16f_set1(MGS_ALPHA_MAX), amin = v16f_set1(MGS_ALPHA_MIN), tmin = v16f_set1(MGS_T_MIN);
-  const v16f one = v16f_set1(1.0f), zero = v16f_set1(0.0f);
+  const v16f zero = v16f_set1(0.0f);
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
   uint32_t j = start;
   for (; j < end; j++) {
@@ -81,20 +80,12 @@ static void blend_tile(mgs_raster *r, size_t tile) {
     const mgs_splat *sp = &r->splat[gi];
     int lo, hi;
     mgs_row_range(sp, y0, nrows, &lo, &hi);
-    v16f dx = xs - v16f_set1(sp->u), op = v16f_set1(sp->opacity);
-    v16f wsum = zero;
+    v16f dx = xs - v16f_set1(sp->u), wsum = zero;
     const v16i gidx = v16i_set1((int32_t)gi);
     for (int y = lo; y <= hi; y++) {
       if (rowdone[y]) continue;
-      float dy = (float)(y0 + y) + 0.5f - sp->v;
-      v16f power = mgs_row_power(sp, dx, dy);
-      v16f alpha = v16f_min(amax, op * v16f_exp_neg(power));
-      v16i m = (power <= zero) & (alpha >= amin) & ~DONE[y];
-      v16f testT = T[y] * (one - alpha);
-      v16i nd = m & (testT < tmin);
-      DONE[y] |= nd;
-      if (v16i_any(nd)) rowdone[y] = !v16i_any(~DONE[y]);
-      m &= ~nd;
+      v16i m;
+      v16f alpha, testT = mgs_row_step(sp, dx, (float)(y0 + y) + 0.5f - sp->v, T[y], &DONE[y], &rowdone[y], &m, &alpha);
       v16f w = v16f_and(m, alpha * T[y]);
       wsum += w;
       v16i better = m & (w > WMAX[y]);

@@ -23,6 +23,26 @@ MGS_VINLINE void mgs_row_range(const mgs_splat *sp, int y0, int nrows, int *lo, 
   int h = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
   *lo = l; *hi = h;
 }
+/* One 16-pixel row of a tile blended with sp as the forward blends it: *m gets the pixels
+ * sp contributes to, *alpha its alpha there and the return value the transmittance after
+ * it (the caller stores it where *m is set); pixels whose transmittance would fall under
+ * MGS_T_MIN are marked done (and *rowdone set when the whole row is). For the passes that
+ * repeat the forward's decisions (blend statistics, normal/median maps). */
+MGS_VINLINE v16f mgs_row_step(const mgs_splat *sp, v16f dx, float dy, v16f T, v16i *done, int *rowdone, v16i *m,
+                              v16f *alpha) {
+  const v16f zero = v16f_set1(0.0f);
+  v16f power = mgs_row_power(sp, dx, dy);
+  v16f a = v16f_min(v16f_set1(MGS_ALPHA_MAX), v16f_set1(sp->opacity) * v16f_exp_neg(power));
+  v16i mm = (power <= zero) & (a >= v16f_set1(MGS_ALPHA_MIN)) & ~*done;
+  v16f testT = T * (v16f_set1(1.0f) - a);
+  v16i nd = mm & (testT < v16f_set1(MGS_T_MIN));
+  *done |= nd;
+  if (v16i_any(nd)) *rowdone = !v16i_any(~*done);
+  *m = mm & ~nd;
+  *alpha = a;
+  return testT;
+}
+
 #if defined(MGS_HALF_ROWS)
 MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
   float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;

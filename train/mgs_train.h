@@ -140,6 +140,10 @@ typedef struct mgs_adc_options {
   float max_screen_px;     /* 20: pruned after the first opacity reset */
   float max_world_scale;   /* 0.1 * extent, pruned after the first opacity reset */
   int white_background;    /* the reference also resets opacity at densify_from then */
+  int reset_prune_wait;    /* 0 (the reference): transparent Gaussians pruned at every densification;
+                              N: not within N iterations after an opacity reset (a compressed
+                              schedule's reset leaves the unscaled learning rate fewer steps than
+                              the reference's 100 to lift opacities over the prune threshold) */
 } mgs_adc_options;
 void mgs_adc_options_default(mgs_adc_options *o);
 

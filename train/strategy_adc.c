@@ -13,6 +13,7 @@
  * *before* its screen-size test, so that test never fires there; here the test uses the
  * largest radius seen during the interval (the evident intent). Set max_screen_px = 0 to
  * get the reference's effective behaviour. */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,6 +32,7 @@ void mgs_adc_options_default(mgs_adc_options *o) {
   o->max_screen_px = 20.0f;
   o->max_world_scale = 0.1f;
   o->white_background = 0;
+  o->reset_prune_wait = 0;
 }
 
 typedef struct adc {
@@ -83,10 +85,20 @@ void mgs_adc_reset_opacity(mgs_gaussians *g, mgs_adam *a) {
   if (a) mgs_adam_reset_group(a, MGS_PARAM_OPACITY);
 }
 
+/* Iterations from the last opacity reset before iteration `it` (a reset at a densification
+ * iteration comes after that densification) to `it`; INT_MAX if none. */
+static int since_reset(const mgs_adc_options *o, int it) {
+  int d = INT_MAX;
+  if (o->opacity_reset_every > 0 && it > o->opacity_reset_every)
+    d = it % o->opacity_reset_every ? it % o->opacity_reset_every : o->opacity_reset_every;
+  if (o->white_background && it > o->densify_from && it - o->densify_from < d) d = it - o->densify_from;
+  return d;
+}
+
 /* force_split (n0 entries or NULL): also split these, whatever their gradient and size
  * (Mini-Splatting's blur split; a Gaussian may then be cloned and split, as there). */
-static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, double extent,
-                                    int prune_big, const uint8_t *force_split, mgs_rng *rng, mgs_error *err) {
+static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, double extent, int prune_big,
+                                    int prune_transparent, const uint8_t *force_split, mgs_rng *rng, mgs_error *err) {
   const mgs_adc_options *o = &a->o;
   size_t n0 = g->n;
   if (a->st.n != n0) { mgs_status st = adc_resize(a, n0, err); if (st) return st; }
@@ -133,7 +145,7 @@ static mgs_status densify_and_prune(adc *a, mgs_gaussians *g, mgs_adam *opt, dou
   const float world_cap = (float)(o->max_world_scale * extent);
   for (size_t i = 0; i < n1; i++) {
     int drop = i < n0 && (sel[i] & 2); /* split originals */
-    drop |= mgs_sigmoidf(g->opacity[i]) < o->min_opacity;
+    drop |= prune_transparent && mgs_sigmoidf(g->opacity[i]) < o->min_opacity;
     if (prune_big) {
       int rad = i < n0 ? a->st.max_radii[i] : 0;
       if (o->max_screen_px > 0 && (float)rad > o->max_screen_px) drop = 1;
@@ -168,7 +180,8 @@ static mgs_status adc_post(void *self, mgs_strategy_step *s, mgs_error *err) {
   }
   if (it > o->densify_from && o->densify_every > 0 && it % o->densify_every == 0) {
     int prune_big = o->opacity_reset_every > 0 && it > o->opacity_reset_every;
-    mgs_status st = densify_and_prune(a, g, s->adam, s->extent, prune_big, NULL, s->rng, err);
+    int prune_transparent = o->reset_prune_wait <= 0 || since_reset(o, it) >= o->reset_prune_wait;
+    mgs_status st = densify_and_prune(a, g, s->adam, s->extent, prune_big, prune_transparent, NULL, s->rng, err);
     if (st) return st;
     s->replaced_groups = (1u << MGS_PARAM_COUNT) - 1;
   }
@@ -252,11 +265,11 @@ mgs_adc_state *mgs_strategy_adc_state(mgs_strategy *s, size_t n_gaussians) {
 mgs_status mgs_adc_densify_and_prune(mgs_strategy *s, mgs_gaussians *g, mgs_adam *opt, double extent,
                                      int prune_big, mgs_rng *rng, mgs_error *err) {
   if (!s || s->ops != &adc_ops) return mgs_error_set(err, MGS_ERR_ARG, "not an adc strategy");
-  return densify_and_prune(s->self, g, opt, extent, prune_big, NULL, rng, err);
+  return densify_and_prune(s->self, g, opt, extent, prune_big, 1, NULL, rng, err);
 }
 
 mgs_status mgs_adc_densify_and_prune_mask(mgs_strategy *s, mgs_gaussians *g, mgs_adam *opt, double extent,
                                           int prune_big, const uint8_t *force_split, mgs_rng *rng, mgs_error *err) {
   if (!s || s->ops != &adc_ops) return mgs_error_set(err, MGS_ERR_ARG, "not an adc strategy");
-  return densify_and_prune(s->self, g, opt, extent, prune_big, force_split, rng, err);
+  return densify_and_prune(s->self, g, opt, extent, prune_big, 1, force_split, rng, err);
 }

@@ -79,13 +79,22 @@ int main(void) {
   run(f, "nochamfer", 0, 1.0, 25.0, 2000, NAN, 100);
   run(f, "nochamfer", 1, 1.0, 25.0, 2000, NAN, 100);
   run(f, "nochamfer", 2, 1.0, 25.0, 2000, NAN, 100);
+  /* "other": a second method (Chamfer +100 % against baseline); "on_other" (--base on_other=other):
+     Chamfer -50 % against other, which is baseline's value: "yes" only against its own base */
+  run(f, "other", 0, 1.0, 25.0, 2000, 0.0200, 100);
+  run(f, "other", 1, 1.0, 25.0, 2000, 0.0202, 100);
+  run(f, "other", 2, 1.0, 25.0, 2000, 0.0198, 100);
+  run(f, "on_other", 0, 1.0, 25.0, 2000, 0.0100, 100);
+  run(f, "on_other", 1, 1.0, 25.0, 2000, 0.01015, 100);
+  run(f, "on_other", 2, 1.0, 25.0, 2000, 0.0099, 100);
   fclose(f);
   static const char results[] =
     "{\"format\":\"morsegs-experiment-results\",\"command\":\"morsegs experiment toy -o earlier\",\"written\":\"then\","
     "\"iterations\":100,\"seeds\":3,\"definitions\":{\"topology_voxels_per_gt_diagonal\":256,\"knobs\":\"baseline: "
     "--grad-threshold 0.0002 x {1, 4, 0.25, 2}\"},\"variants\":[{\"name\":\"baseline\",\"status\":\"available\"},"
     "{\"name\":\"good\",\"status\":\"available\"},{\"name\":\"bad\",\"status\":\"available\"},{\"name\":\"single\","
-    "\"status\":\"available\"},{\"name\":\"nochamfer\",\"status\":\"available\"},{\"name\":\"missing\",\"status\":\"not available\","
+    "\"status\":\"available\"},{\"name\":\"nochamfer\",\"status\":\"available\"},{\"name\":\"other\",\"status\":\"available\"},"
+    "{\"name\":\"on_other\",\"status\":\"available\",\"base\":\"other\"},{\"name\":\"missing\",\"status\":\"not available\","
     "\"reason\":\"morsegs train: --nope: unknown\"}],\"datasets\":[{\"name\":\"toy\",\"gt_mesh\":\"\",\"variants\":["
     "{\"name\":\"bad\",\"hypotheses\":{\"H3\":{\"verdict\":\"yes\"}}}]}]}";
   snprintf(path, sizeof path, "%s/RESULTS.json", from);
@@ -94,6 +103,9 @@ int main(void) {
   CHECK(mgs_test_sh("%s experiment --report-from %s -o %s > /dev/null 2>&1", cli, from, from) == 2);
   CHECK(mgs_test_sh("%s experiment --report-from %s -o %s some/data > /dev/null 2>&1", cli, from, out) == 2);
   CHECK(mgs_test_sh("%s experiment --report-from %s -o %s", cli, from, out) == 0);
+  /* --base names variants of the run */
+  CHECK(mgs_test_sh("%s experiment nodata -o %s/b --variants baseline --base nope=baseline 2>&1 | grep -q \"'nope' is not among\"", cli, dir) == 0);
+  CHECK(mgs_test_sh("%s experiment nodata -o %s/b --variants baseline --base baseline=baseline > /dev/null 2>&1", cli, dir) == 2);
 
   char *text = NULL;
   size_t len;
@@ -132,7 +144,11 @@ int main(void) {
   h = hyp(root, "baseline", "H1");
   CHECK(h && !strcmp(str(h, "verdict"), "reference"));
   cJSON *counts = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "verdict_counts"), "H1");
-  CHECK(counts && num(cJSON_GetObjectItem(counts, "raw"), "yes") == 1 && num(cJSON_GetObjectItem(counts, "raw"), "worse") == 1);
+  h = hyp(root, "on_other", "H1"); /* against its --base */
+  CHECK(h && !strcmp(str(h, "verdict"), "yes") && fabs(num(h, "change_mean") - log(0.5)) < 0.01);
+  h = hyp(root, "other", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "worse"));
+  CHECK(counts && num(cJSON_GetObjectItem(counts, "raw"), "yes") == 2 && num(cJSON_GetObjectItem(counts, "raw"), "worse") == 2);
   cJSON_Delete(root);
   free(text);
   /* RESULTS.md: intervals beside the words, the front, the comparison with the earlier words */
@@ -141,7 +157,9 @@ int main(void) {
   CHECK(text && strstr(text, "| toy | good | 3 | -50.0 % ["));
   CHECK(text && strstr(text, "Pareto front (what H3 compares with"));
   CHECK(text && strstr(text, "## Verdicts against the earlier report"));
-  CHECK(text && strstr(text, "| missing | not available |"));
+  CHECK(text && strstr(text, "| missing | baseline | not available |"));
+  CHECK(text && strstr(text, "| on_other | other | available |") && strstr(text, "| on_other (against other) |"));
+  CHECK(text && strstr(text, "The Pareto front of other"));
   free(text);
   static const char *files[] = {"curves.csv", "h3.csv", "plots/toy_psnr_time.png", "plots/toy_psnr_time.svg",
                                 "plots/toy_chamfer_time.png", "plots/toy_chamfer_time.svg", "plots/toy_h3_count_psnr.png"};

@@ -391,7 +391,7 @@ static void test_fd_far(void) {
  * ray meets its plane at local (u, v); alpha = min(0.99, o exp(-min(u^2 + v^2, 2 d^2)/2))
  * with d the pixel's distance to the centre of the box of the projected 3-sigma ellipse
  * (its boundary projected point by point), on the tiles of that box; colour and depth
- * follow. */
+ * follow (the intersection's depth, the centre's where the filter wins). */
 static void forward_vs_ray(double s0_, double s1_, double tilt, float logit) {
   fd_case c;
   random_case(&c, 700, 0, 1);
@@ -432,16 +432,19 @@ static void forward_vs_ray(double s0_, double s1_, double tilt, float logit) {
       double v = (hit[0] * R[1] + hit[1] * R[4] + hit[2] * R[7]) / s1;
       double dx = x + 0.5 - cu, dy = y + 0.5 - cv;
       double rho = fmin(u * u + v * v, 2.0 * (dx * dx + dy * dy));
-      double hc[3];
+      double hc[3], centre[3], origin[3] = {0, 0, 0};
       mgs_camera_world_to_cam(&c.cam, hit, hc);
+      mgs_camera_world_to_cam(&c.cam, origin, centre);
+      /* where the filter wins, the depth is the centre's (the authors' Tw.z) */
+      double z = u * u + v * v <= 2.0 * (dx * dx + dy * dy) ? hc[2] : centre[2];
       double a = fmin(0.99, op * exp(-0.5 * rho));
-      if (a < 1.0 / 255 || hc[2] < 0.2) a = 0;
+      if (a < 1.0 / 255 || z < 0.2) a = 0;
       if (x / 16 < tx0 || x / 16 >= tx1 || y / 16 < ty0 || y / 16 >= ty1) a = 0;
       size_t p = (size_t)y * 40 + x;
       double col = a * (rgb0 < 0 ? 0 : rgb0) + (1 - a) * c.s.background[0];
       if (fabs(2.0 * (dx * dx + dy * dy) - (u * u + v * v)) < 1e-3) continue; /* at the switch */
       maxd = fmax(maxd, fabs(col - out.color[3 * p]));
-      if (a > 0) maxz = fmax(maxz, fabs(a * hc[2] - out.depth[p]));
+      if (a > 0) maxz = fmax(maxz, fabs(a * z - out.depth[p]));
       asum += a;
     }
   fprintf(stderr, "  forward vs ray (scales %g, %g, tilt %g, logit %g): max colour diff %.3g, max depth diff %.3g, "

@@ -283,6 +283,44 @@ static void test_adc_hooks_accumulate_and_reset(void) {
   mgs_adam_destroy(a); mgs_gaussians_destroy(g); mgs_gaussians_destroy(gr); mgs_strategy_destroy(s);
 }
 
+/* A compressed schedule (densify every 10, reset every 300, reset_prune_wait 100): the
+ * densifications within 100 iterations after a reset keep transparent Gaussians, the first
+ * one after that prunes them; with the wait 0 (the reference) the first one prunes. */
+static void test_adc_reset_prune_wait(void) {
+  for (int wait = 0; wait <= 100; wait += 100) {
+    mgs_adc_options o;
+    mgs_adc_options_default(&o);
+    o.densify_from = 50; o.densify_until = 1500; o.densify_every = 10; o.opacity_reset_every = 300;
+    o.min_opacity = 0.05f; /* 2DGS' cull, above the reset's 0.01 */
+    o.reset_prune_wait = wait;
+    mgs_strategy *s = mgs_strategy_adc_create(&o);
+    mgs_gaussians *g = model(2), *gr = model(2);
+    mgs_adam *a = mgs_adam_create(2);
+    g->opacity[0] = mgs_logitf(0.5f); g->opacity[1] = mgs_logitf(0.5f);
+    for (int k = 0; k < 6; k++) g->log_scale[k] = logf(0.001f); /* not too big (pruned after a reset) */
+    float gm[2] = {0, 0};
+    int radii[2] = {1, 1};
+    mgs_rng rng; mgs_rng_init(&rng, 1, 0);
+    mgs_strategy_step ss;
+    memset(&ss, 0, sizeof ss);
+    ss.model = g; ss.adam = a; ss.grad = gr; ss.grad_mean2d = gm; ss.radii = radii; ss.extent = 1; ss.rng = &rng;
+    ss.width = ss.height = 64;
+    mgs_error err;
+    ss.iteration = 300; /* densify (nothing), then the reset: both at 0.01 */
+    CHECK_OK(s->ops->post_backward(s->self, &ss, &err), &err);
+    CHECK_NEAR(mgs_sigmoidf(g->opacity[0]), 0.01, 1e-6);
+    g->opacity[0] = mgs_logitf(0.06f); /* one recovered, one did not */
+    for (int it = 310; it <= 400; it += 10) {
+      ss.iteration = it;
+      CHECK_OK(s->ops->post_backward(s->self, &ss, &err), &err);
+      size_t want = wait == 0 || it >= 400 ? 1 : 2;
+      CHECK_MSG(g->n == want, "wait %d, iteration %d: %zu Gaussians, want %zu", wait, it, g->n, want);
+      if (g->n != want) break;
+    }
+    mgs_adam_destroy(a); mgs_gaussians_destroy(g); mgs_gaussians_destroy(gr); mgs_strategy_destroy(s);
+  }
+}
+
 static void test_knn_and_init(void) {
   /* a 5x5x5 lattice of spacing 0.1: every point's 3 nearest are at 0.1 */
   size_t n = 125;
@@ -350,6 +388,7 @@ int main(void) {
   RUN(test_adc_clone_split_prune);
   RUN(test_adc_split_distribution);
   RUN(test_adc_hooks_accumulate_and_reset);
+  RUN(test_adc_reset_prune_wait);
   RUN(test_knn_and_init);
   return mgs_test_finish();
 }

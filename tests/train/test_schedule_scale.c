@@ -109,6 +109,19 @@ static void every_strategy(void) {
   CHECK(o.adc.opacity_reset_every == 0);
 }
 
+/* the compressed schedule waits the reference's 100 iterations after a reset before
+   pruning transparent Gaussians; the reference schedule does not need to */
+static void reset_prune_wait(void) {
+  mgs_train_config c;
+  mgs_train_options o;
+  parse(&c, "adc", "0.1", NULL);
+  mgs_config_train_options(&c, &o);
+  CHECK(o.adc.reset_prune_wait == 100 && o.adc.densify_every == 10);
+  parse(&c, "adc", "1", NULL);
+  mgs_config_train_options(&c, &o);
+  CHECK(o.adc.reset_prune_wait == 0);
+}
+
 static void recorded(void) {
   mgs_train_config c;
   parse(&c, "mini-splatting", "0.25", NULL);
@@ -139,5 +152,6 @@ static void recorded(void) {
 int main(void) {
   RUN(every_strategy);
   RUN(recorded);
+  RUN(reset_prune_wait);
   return mgs_test_finish();
 }

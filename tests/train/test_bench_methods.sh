@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# morsegs bench train --method NAME=ARGS trains NAME through the train command's option table
+# and setup: "3dgs=" (no options) must train exactly what the default ADC run trains (same
+# PSNR to the digit, same count), a 2DGS method must be a different model, bad method
+# arguments must fail naming the method and the option.
+#   test_bench_methods.sh MORSEGS WORKDIR
+set -euo pipefail
+cli=$1 work=$2
+rm -rf "$work" && mkdir -p "$work" && cd "$work"
+common=(bench train --scenes sphere --res 32 --iters 120 --no-peer --threads 1 --work "$work/data")
+"$cli" "${common[@]}" -o default > default.log 2>&1
+"$cli" "${common[@]}" -o methods --method "3dgs=" --method "surfels=--model 2dgs" > methods.log 2>&1
+row() { awk -F, -v c="$2" '$2 == c && $3 == 120 {print $7 "," $8}' "$1/train.csv"; }
+d=$(row default adc) m=$(row methods 3dgs) s=$(row methods surfels)
+echo "default adc: $d   method 3dgs=: $m   method surfels: $s"
+[ -n "$d" ] && [ "$d" = "$m" ] || { echo "FAIL: --method '3dgs=' differs from the default run ($m vs $d)" >&2; exit 1; }
+[ -n "$s" ] && [ "$s" != "$m" ] || { echo "FAIL: the 2dgs method trained the same model" >&2; exit 1; }
+grep -q "terms_ms" methods/train.csv || { echo "FAIL: no terms column" >&2; exit 1; }
+if "$cli" "${common[@]}" -o bad --method "x=--no-such-option 3" > bad.log 2>&1; then echo "FAIL: a bad option passed" >&2; exit 1; fi
+grep -q -- "--method x: unknown option --no-such-option" bad.log || { cat bad.log; exit 1; }
+if "$cli" "${common[@]}" -o bad --method "noequals" > bad2.log 2>&1; then echo "FAIL: NAME=ARGS not checked" >&2; exit 1; fi
+grep -q "needs NAME=ARGS" bad2.log || { cat bad2.log; exit 1; }
+echo "test_bench_methods: OK"

@@ -45,6 +45,10 @@ static inline mgs_surf2d_cold *mgs_raster2d_cold(const mgs_raster *r) {
  * live (all 0 otherwise). */
 enum { S2_C0 = 0, S2_C1 = 3, S2_C2 = 6, S2_DET = 9, S2_OX, S2_OY, S2_OP, S2_R, S2_G, S2_B, S2_ZC, S2_N, S2_COUNT = S2_N + 3 };
 #define S2_STRIDE_MAX 32
-static inline int mgs_raster2d_slot_stride(const mgs_raster *r) { (void)r; return S2_STRIDE_MAX; }
-static inline int mgs_raster2d_slot_count(const mgs_raster *r) { return r->s_grad_live ? S2_COUNT : S2_N; }
+/* Without live map gradients a slot is its first 16 floats (one 64-byte line: the slots are
+ * written in random order) and the zc sums sit in a side array of one float a slot (the
+ * upper half of the allocation; 4 bytes a slot stay in cache). */
+static inline int mgs_raster2d_slot_stride(const mgs_raster *r) { return r->s_grad_live ? S2_STRIDE_MAX : 16; }
+static inline int mgs_raster2d_slot_count(const mgs_raster *r) { return r->s_grad_live ? S2_COUNT : 16; }
+static inline float *mgs_raster2d_zc_side(const mgs_raster *r) { return r->sgrad + (size_t)r->cap_sgrad * 16; }
 #endif

@@ -270,6 +270,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
   const int st = mgs_raster2d_slot_stride(r); /* S2_STRIDE_MAX exactly when geo */
+  float *zside = mgs_raster2d_zc_side(r);
   if (start == end) { r->tile_evals[tile] = 0; return; }
   enum { GR, GG, GB, GD, GN0, GN1, GN2, GM, GDI, FM1, FM2, FA, K, FM0, NIN };
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], I[NIN][MGS_TILE_SIZE];
@@ -319,8 +320,10 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   /* rho2 = F |pixel - o|^2: dL/do = -F/2 (-2) sum q (pixel - o) = F sum q (pixel - o) */
   v16f slot_fac = one;
   slot_fac[S2_OX] = slot_fac[S2_OY] = MGS_2DGS_FILTER_INV2;
-  for (uint32_t j = start + (uint32_t)maxn; j < end; j++)
-    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)(geo ? S2_COUNT : S2_N) * sizeof(float));
+  for (uint32_t j = start + (uint32_t)maxn; j < end; j++) {
+    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)(geo ? S2_COUNT : 16) * sizeof(float));
+    if (!geo) zside[r->isect_slot[j]] = 0;
+  }
   const mgs_surf2d *surf = mgs_raster2d_surf(r);
   uint32_t evals = 0;
   for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
@@ -397,13 +400,15 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       Q2Y = v16f_fma(q2, yp, Q2Y);
     }
     if (!touched) { /* no pixel: a zero slot */
-      memset(out, 0, (size_t)(geo ? S2_COUNT : S2_N) * sizeof(float));
+      memset(out, 0, (size_t)(geo ? S2_COUNT : 16) * sizeof(float));
+      if (!geo) zside[r->isect_slot[j]] = 0;
       continue;
     }
     /* the 16 sums in slot order, one transposing reduction */
     v16f acc[16] = {PX * ic.xp, PY * ic.xp, PZ * ic.xp, PXY, PYY, PZY, PX, PY, PZ, AD, Q2 * ic.xp, Q2Y, AOP, AR, AG, AB};
     v16f_store(out, v16f_sum16(acc) * slot_fac);
-    out[S2_ZC] = v16f_sum(AZC);
+    if (geo) out[S2_ZC] = v16f_sum(AZC);
+    else zside[r->isect_slot[j]] = v16f_sum(AZC);
     if (geo) {
       out[S2_N] = v16f_sum(AN0); out[S2_N + 1] = v16f_sum(AN1); out[S2_N + 2] = v16f_sum(AN2);
 

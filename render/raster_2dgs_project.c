@@ -6,9 +6,13 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 #include "core/mgs_math.h"
 #include "core/mgs_parallel.h"
-#include "render/raster_internal.h"
+#include "render/raster_2dgs.h"
+#include "render/raster_simd.h"
 
 #define CUTOFF 3.0f
 #define FILTER_SIZE 0.707106f
@@ -49,6 +53,25 @@ static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const dou
   Tw[2] = (float)td[2];
 }
 
+/* The affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T. */
+static void surf_coeffs(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, mgs_surf2d *sf) {
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; k++) {
+    w[k] = Tw[k];
+    u[k] = (double)Tu[k] - (double)ox * w[k];
+    v[k] = (double)Tv[k] - (double)oy * w[k];
+  }
+  double c0[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
+  double c1[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
+  double c2[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  for (int k = 0; k < 3; k++) {
+    sf->c0[k] = (float)c0[k];
+    sf->c1[k] = (float)c1[k];
+    sf->c2[k] = (float)c2[k];
+  }
+  sf->det = (float)(w[0] * c2[0] + w[1] * c2[1] + w[2] * c2[2]);
+}
+
 static void cull(mgs_raster *r, size_t i) {
   r->radii[i] = 0;
   r->count[i] = 0;
@@ -56,29 +79,29 @@ static void cull(mgs_raster *r, size_t i) {
 
 static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
 
-static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
+static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   const mgs_gaussians *g = r->g;
   const double *V = r->cam.w2c;
   double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
   for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
   cull(r, i);
-  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return;
+  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return 0;
   const float *q = g->rot + 4 * i;
-  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return;
-  mgs_surfel *sf = &r->surf[i];
-  float R[9], s[2];
-  surfel_T(r, cp, i, td, R, s, sf->Tu, sf->Tv, sf->Tw);
+  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return 0;
+  mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
+  float R[9], s[2], Tu[3], Tv[3], Tw[3];
+  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
   /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
   double cosv = 0;
   for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
-  if (cosv == 0 || !isfinite(cosv)) return;
-  sf->nsign = cosv > 0 ? 1.0f : -1.0f;
-  for (int k = 0; k < 3; k++) sf->n[k] = sf->nsign * R[3 * k + 2];
+  if (cosv == 0 || !isfinite(cosv)) return 0;
+  mgs_surf2d_cold *cd = mgs_raster2d_cold(r) + i;
+  cd->nsign = cosv > 0 ? 1.0f : -1.0f;
+  for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * R[3 * k + 2];
   /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
-  const float *Tu = sf->Tu, *Tv = sf->Tv, *Tw = sf->Tw;
   const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
   float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-  if (d == 0 || !isfinite(d)) return;
+  if (d == 0 || !isfinite(d)) return 0;
   float f[3] = {t[0] / d, t[1] / d, t[2] / d};
   float cx = f[0] * Tu[0] * Tw[0] + f[1] * Tu[1] * Tw[1] + f[2] * Tu[2] * Tw[2];
   float cy = f[0] * Tv[0] * Tw[0] + f[1] * Tv[1] * Tw[1] + f[2] * Tv[2] * Tw[2];
@@ -87,28 +110,23 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   float hx = sqrtf(hx0 > 1e-4f ? hx0 : 1e-4f), hy = sqrtf(hy0 > 1e-4f ? hy0 : 1e-4f);
   float ext = hx > hy ? hx : hy;
   float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
-  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return;
-  sf->cx = cx;
-  sf->cy = cy;
+  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return 0;
+  sf->ox = cx;
+  sf->oy = cy;
+  sf->zc = Tw[2];
+  surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
   /* the reference's getRect, in its pixel coordinates (centres at integers) */
   double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
   int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
   int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_x);
   int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_y);
-  if ((x1 - x0) * (y1 - y0) == 0) return;
-  /* colour */
+  if ((x1 - x0) * (y1 - y0) == 0) return 0;
+  /* view direction (the colour follows per block of 16: surfel_colours) */
   mgs_proj_aux *ax = &r->aux[i];
   double dd[3] = {p[0] - cp->campos[0], p[1] - cp->campos[1], p[2] - cp->campos[2]};
   double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
   for (int k = 0; k < 3; k++) ax->dir[k] = dist > 0 ? (float)(dd[k] / dist) : 0.0f;
   ax->dist = (float)dist;
-  float rgb[3];
-  mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, rgb);
-  for (int k = 0; k < 3; k++) {
-    if (!isfinite(rgb[k])) return;
-    ax->clamped[k] = rgb[k] < 0;
-    sf->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
-  }
   for (int k = 0; k < 3; k++) ax->t[k] = (float)td[k];
   float op = mgs_sigmoidf(g->opacity[i]);
   sf->opacity = op;
@@ -116,40 +134,12 @@ static void project_one(mgs_raster *r, const cam_par *cp, size_t i) {
   memset(sp, 0, sizeof *sp);
   sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
   r->radii[i] = (int)radius;
-  if (op < MGS_ALPHA_MIN) return; /* alpha < 1/255 everywhere: nothing to bin */
-  /* The box that can hold alpha >= 1/255, i.e. rho <= rmax: the screen-space filter's disc
-     and the box of the ellipse {u^2 + v^2 = rmax} (compute_aabb with that cutoff; an
-     unbounded conic, d >= 0, bounds nothing). The tiles stay the authors'; pixels outside
-     the box receive nothing from the surfel, so skipping them changes no value. */
-  {
-    float rmax = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f;
-    float rf = sqrtf(rmax / MGS_2DGS_FILTER_INV2);
-    float ylo = cy - rf, yhi = cy + rf, xlo = cx - rf, xhi = cx + rf;
-    const float t2[3] = {rmax, rmax, -1.0f};
-    float d2 = t2[0] * Tw[0] * Tw[0] + t2[1] * Tw[1] * Tw[1] + t2[2] * Tw[2] * Tw[2];
-    int bounded = d2 < 0 && isfinite(d2);
-    if (bounded) {
-      float f2[3] = {t2[0] / d2, t2[1] / d2, t2[2] / d2};
-      float py2 = f2[0] * Tv[0] * Tw[0] + f2[1] * Tv[1] * Tw[1] + f2[2] * Tv[2] * Tw[2];
-      float ey = py2 * py2 - (f2[0] * Tv[0] * Tv[0] + f2[1] * Tv[1] * Tv[1] + f2[2] * Tv[2] * Tv[2]);
-      float px2 = f2[0] * Tu[0] * Tw[0] + f2[1] * Tu[1] * Tw[1] + f2[2] * Tu[2] * Tw[2];
-      float ex = px2 * px2 - (f2[0] * Tu[0] * Tu[0] + f2[1] * Tu[1] * Tu[1] + f2[2] * Tu[2] * Tu[2]);
-      ey = sqrtf(ey > 0 ? ey : 0);
-      ex = sqrtf(ex > 0 ? ex : 0);
-      bounded = isfinite(py2) && isfinite(ey) && isfinite(px2) && isfinite(ex);
-      if (bounded) {
-        ylo = fminf(ylo, py2 - ey); yhi = fmaxf(yhi, py2 + ey);
-        xlo = fminf(xlo, px2 - ex); xhi = fmaxf(xhi, px2 + ex);
-      }
-    }
-    if (!bounded) { ylo = xlo = -INFINITY; yhi = xhi = INFINITY; }
-    float my = 1.0f + 1e-3f * (yhi - ylo), mx = 1.0f + 1e-3f * (xhi - xlo);
-    sf->ylo = ylo - my; sf->yhi = yhi + my;
-    sf->xlo = xlo - mx; sf->xhi = xhi + mx;
-  }
+  if (op < MGS_ALPHA_MIN) return 1; /* alpha < 1/255 everywhere: nothing to bin */
+  sf->rf = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
   uint16_t *rc = r->rect + 4 * i;
   rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
   r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+  return 1;
 }
 
 typedef struct proj_ctx {
@@ -158,9 +148,155 @@ typedef struct proj_ctx {
   const uint32_t *idx;
 } proj_ctx;
 
+/* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
+ * {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in the
+ * pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its quadratic
+ * part is positive definite (p.z keeps one sign inside: p = 0 has no pixel); otherwise (a
+ * surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax, which already
+ * has 0.1 %, and the margins) so that the float per-pixel rho3 of every pixel it leaves out
+ * is above rmax: skipping those pixels changes no value. Tiles of the authors' rect that
+ * miss it are not binned (the same result, as 3DGS's binning). For the binned surfels
+ * blk[0..nl) (project_one stored rmax in rf), in double, 16 lanes in branch-free loops. */
+typedef double v8d2 __attribute__((vector_size(64)));
+typedef int64_t v8l2 __attribute__((vector_size(64)));
+static inline v8d2 d8_set1(double x) { return (v8d2){x, x, x, x, x, x, x, x}; }
+static inline v8d2 d8_sel(v8l2 m, v8d2 a, v8d2 b) { return (v8d2)((m & (v8l2)a) | (~m & (v8l2)b)); }
+static inline v8d2 d8_sqrt(v8d2 x) {
+#if defined(__AVX512F__)
+  return (v8d2)_mm512_sqrt_pd((__m512d)x);
+#else
+  for (int i = 0; i < 8; i++) x[i] = sqrt(x[i]);
+  return x;
+#endif
+}
+static inline v8d2 d8_abs(v8d2 x) { return (v8d2)((v8l2)x & (v8l2){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}); }
+static inline v8d2 d8_load(const double *p) { v8d2 v; memcpy(&v, p, sizeof v); return v; }
+static inline void d8_store(double *p, v8d2 v) { memcpy(p, &v, sizeof v); }
+
+static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  double A[3][16], B[3][16], C[3][16], rmx[16];
+  for (int l = 0; l < 16; l++) {
+    const mgs_surf2d *sf = surf + blk[l < nl ? l : 0];
+    for (int k = 0; k < 3; k++) { A[k][l] = sf->c0[k]; B[k][l] = sf->c1[k]; C[k][l] = sf->c2[k]; }
+    rmx[l] = sf->rf;
+  }
+  double yc[16], xc[16], sl[16], h0[16], kq[16], rf[16], xlo[16], xhi[16], ylo[16], yhi[16];
+  int64_t bnd[16];
+  for (int h = 0; h < 16; h += 8) {
+    const v8d2 zero = d8_set1(0.0);
+    v8d2 a0 = d8_load(A[0] + h), a1 = d8_load(A[1] + h), a2 = d8_load(A[2] + h);
+    v8d2 b0 = d8_load(B[0] + h), b1 = d8_load(B[1] + h), b2 = d8_load(B[2] + h);
+    v8d2 c0 = d8_load(C[0] + h), c1 = d8_load(C[1] + h), c2 = d8_load(C[2] + h), rm = d8_load(rmx + h);
+    v8d2 rfl = d8_sqrt(rm * (1.0 / MGS_2DGS_FILTER_INV2)) * 1.001 + 0.02, rb = rm * 1.01 + 1e-3;
+    v8d2 M0 = a0 * a0 + a1 * a1 - rb * a2 * a2, M1 = a0 * b0 + a1 * b1 - rb * a2 * b2;
+    v8d2 M2 = b0 * b0 + b1 * b1 - rb * b2 * b2, M3 = a0 * c0 + a1 * c1 - rb * a2 * c2;
+    v8d2 M4 = b0 * c0 + b1 * c1 - rb * b2 * c2, M5 = c0 * c0 + c1 * c1 - rb * c2 * c2;
+    v8d2 det2 = M0 * M2 - M1 * M1, idet = 1.0 / det2, im0 = 1.0 / M0;
+    v8d2 xcl = (M4 * M1 - M3 * M2) * idet, ycl = (M3 * M1 - M4 * M0) * idet;
+    v8d2 qc = M5 + M3 * xcl + M4 * ycl;
+    v8l2 pd = (M0 > zero) & (det2 > zero), el = pd & (qc < zero);
+    v8d2 ex = d8_sqrt(d8_sel(el, zero - qc * M2 * idet, zero)), ey = d8_sqrt(d8_sel(el, zero - qc * M0 * idet, zero));
+    v8d2 hh = d8_sel(el, zero - qc * im0, d8_set1(-1.0)), kk = d8_sel(el, det2 * im0 * im0, zero);
+    v8d2 ss = d8_sel(el, zero - M1 * im0, zero), x_c = d8_sel(el, xcl, zero), y_c = d8_sel(el, ycl, zero);
+    v8d2 nrf = zero - rfl, t;
+    t = xcl - ex; v8d2 xl = d8_sel(el & (t < nrf), t, nrf);
+    t = xcl + ex; v8d2 xh = d8_sel(el & (t > rfl), t, rfl);
+    t = ycl - ey; v8d2 yl = d8_sel(el & (t < nrf), t, nrf);
+    t = ycl + ey; v8d2 yh = d8_sel(el & (t > rfl), t, rfl);
+    v8d2 chk = x_c + y_c + hh + kk + ss + xl + xh + yl + yh;
+    v8l2 ok = pd & (chk - chk == zero) & (d8_abs(xl) + d8_abs(xh) + d8_abs(yl) + d8_abs(yh) < d8_set1(1e7));
+    d8_store(yc + h, d8_sel(ok, y_c, zero)); d8_store(xc + h, d8_sel(ok, x_c, zero));
+    d8_store(sl + h, d8_sel(ok, ss, zero)); d8_store(kq + h, d8_sel(ok, kk, zero));
+    d8_store(h0 + h, d8_sel(ok, hh, d8_set1(INFINITY)));
+    d8_store(rf + h, rfl);
+    d8_store(xlo + h, xl); d8_store(xhi + h, xh); d8_store(ylo + h, yl); d8_store(yhi + h, yh);
+    memcpy(bnd + h, &ok, sizeof ok);
+  }
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    mgs_surf2d *sf = surf + i;
+    sf->yc = (float)yc[l]; sf->xc = (float)xc[l]; sf->sl = (float)sl[l]; sf->h0 = (float)h0[l]; sf->kq = (float)kq[l];
+    sf->rf = (float)rf[l];
+    sf->pad = 0;
+    if (!bnd[l] || !r->count[i]) continue; /* unbounded, or culled by its colour meanwhile */
+    uint16_t *rc = r->rect + 4 * i;
+    double mx = 0.05 + 1e-3 * (xhi[l] - xlo[l]), my = 0.05 + 1e-3 * (yhi[l] - ylo[l]), ts = 1.0 / MGS_TILE_SIZE;
+    int x0 = clamp_tile(floor((sf->ox + xlo[l] - mx - 0.5) * ts), r->tiles_x);
+    int x1 = clamp_tile(floor((sf->ox + xhi[l] + mx - 0.5) * ts) + 1, r->tiles_x);
+    int y0 = clamp_tile(floor((sf->oy + ylo[l] - my - 0.5) * ts), r->tiles_y);
+    int y1 = clamp_tile(floor((sf->oy + yhi[l] + my - 0.5) * ts) + 1, r->tiles_y);
+    if (x0 < rc[0]) x0 = rc[0];
+    if (x1 > rc[2]) x1 = rc[2];
+    if (y0 < rc[1]) y0 = rc[1];
+    if (y1 > rc[3]) y1 = rc[3];
+    if (x1 <= x0 || y1 <= y0) { r->count[i] = 0; continue; }
+    rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
+    r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
+  }
+}
+
+/* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
+ * 16 at once; a non-finite colour culls its surfel. */
+static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
+  const mgs_gaussians *g = r->g;
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  float rgbl[3][16];
+#if defined(__AVX512F__)
+  float dirl[3][16];
+  int32_t lane[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
+    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
+    for (int k = 0; k < 3; k++) dirl[k][l] = ax->dir[k];
+  }
+  mgs_sh_eval16(r->s.sh_degree, g->sh_dc + 3 * blk[0], g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane,
+                (uint16_t)((1u << nl) - 1), dirl, rgbl);
+#else
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    float c3[3];
+    mgs_sh_eval(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, r->aux[i].dir, c3);
+    for (int k = 0; k < 3; k++) rgbl[k][l] = c3[k];
+  }
+#endif
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l];
+    mgs_proj_aux *ax = &r->aux[i];
+    mgs_surf2d *sf = surf + i;
+    float rgb[3] = {rgbl[0][l], rgbl[1][l], rgbl[2][l]};
+    if (!isfinite(rgb[0]) || !isfinite(rgb[1]) || !isfinite(rgb[2])) { cull(r, i); continue; }
+    for (int k = 0; k < 3; k++) {
+      ax->clamped[k] = rgb[k] < 0;
+      sf->rgb[k] = rgb[k] < 0 ? 0 : rgb[k];
+    }
+  }
+}
+
 static void project_range(void *vctx, size_t b, size_t e) {
   const proj_ctx *pc = vctx;
-  for (size_t k = b; k < e; k++) project_one(pc->r, &pc->cp, pc->idx ? pc->idx[k] : k);
+  size_t blk[16], bb[16];
+  int nl = 0, nb = 0;
+  for (size_t k = b; k < e; k++) {
+    size_t i = pc->idx ? pc->idx[k] : k;
+    if (!pc->idx && k + 8 < e) { /* the records are written line by line: claim them ahead */
+      const mgs_raster *r = pc->r;
+      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8), 1);
+      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8) + sizeof(mgs_surf2d) - 1, 1);
+      __builtin_prefetch(&r->splat[k + 8], 1);
+      __builtin_prefetch(&r->aux[k + 8], 1);
+    }
+    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
+    if (project_one(pc->r, &pc->cp, i)) {
+      blk[nl++] = i;
+      if (pc->r->count[i]) bb[nb++] = i;
+    }
+    if (nb == 16) { surfel_bounds(pc->r, bb, nb); nb = 0; }
+    if (nl == 16) { surfel_colours(pc->r, blk, nl); nl = 0; }
+  }
+  if (nb) surfel_bounds(pc->r, bb, nb);
+  if (nl) surfel_colours(pc->r, blk, nl);
 }
 
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
@@ -173,29 +309,72 @@ void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
   mgs_parallel_for(0, idx ? m : r->n, 256, project_range, &pc);
 }
 
-/* Backward of one binned surfel: gs = its summed slots. */
+static void cross_d(const double a[3], const double b[3], double c[3]) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* surf_coeffs backward: dL/d(c0, c1, c2, det) (gs, S2 layout) to dL/d(Tu, Tv, Tw). (ox, oy)
+ * only moves the origin p is written about (p itself does not depend on it): a constant. */
+static void coeffs_backward(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, const float *gs,
+                            float dTu[3], float dTv[3], float dTw[3]) {
+  double u[3], v[3], w[3], g0[3], g1[3], g2[3], c2[3], t[3];
+  for (int k = 0; k < 3; k++) {
+    w[k] = Tw[k];
+    u[k] = (double)Tu[k] - (double)ox * w[k];
+    v[k] = (double)Tv[k] - (double)oy * w[k];
+    g0[k] = gs[S2_C0 + k];
+    g1[k] = gs[S2_C1 + k];
+  }
+  cross_d(u, v, c2);
+  /* det = w.c2 */
+  for (int k = 0; k < 3; k++) g2[k] = gs[S2_C2 + k] + (double)gs[S2_DET] * w[k];
+  double du[3], dv[3], dw[3];
+  for (int k = 0; k < 3; k++) dw[k] = (double)gs[S2_DET] * c2[k];
+  /* c2 = u x v: du = v x g2, dv = g2 x u */
+  cross_d(v, g2, du);
+  cross_d(g2, u, dv);
+  /* c0 = v x w (= Tv x Tw): dv += w x g0, dw += g0 x v */
+  cross_d(w, g0, t); for (int k = 0; k < 3; k++) dv[k] += t[k];
+  cross_d(g0, v, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
+  /* c1 = w x u: dw += u x g1, du += g1 x w */
+  cross_d(u, g1, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
+  cross_d(g1, w, t); for (int k = 0; k < 3; k++) du[k] += t[k];
+  /* u = Tu - ox Tw, v = Tv - oy Tw */
+  for (int k = 0; k < 3; k++) {
+    dTu[k] = (float)du[k];
+    dTv[k] = (float)dv[k];
+    dTw[k] = (float)(dw[k] - ox * du[k] - oy * dv[k]);
+  }
+  dTw[2] += gs[S2_ZC]; /* the filter's depth is Tw2 */
+}
+
+/* Backward of one binned surfel but its colour: gs = its summed slots; out: dL/d(unclamped
+ * colour) and the mean gradient so far. */
 static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float *gs, mgs_gaussians *grad, size_t gbase,
-                         float *grad_mean2d) {
+                         float *grad_mean2d, float drgb_out[3], float dmean_out[3]) {
   const mgs_gaussians *g = r->g;
-  const mgs_surfel *sf = &r->surf[i];
+  const mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
   const mgs_proj_aux *ax = &r->aux[i];
   const double *V = r->cam.w2c;
   double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
   for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
   float R[9], s[2], Tu[3], Tv[3], Tw[3];
   surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
-  float dTu[3] = {gs[0], gs[1], gs[2]}, dTv[3] = {gs[3], gs[4], gs[5]}, dTw[3] = {gs[6], gs[7], gs[8]};
+  float dTu[3], dTv[3], dTw[3];
+  coeffs_backward(Tu, Tv, Tw, sf->ox, sf->oy, gs, dTu, dTv, dTw);
   /* the authors' densification signal: dL/dT's centre column times the depth, in NDC */
   if (grad_mean2d) {
-    float gx = gs[2] * Tw[2] * 0.5f * (float)r->width, gy = gs[5] * Tw[2] * 0.5f * (float)r->height;
+    float gx = dTu[2] * Tw[2] * 0.5f * (float)r->width, gy = dTv[2] * Tw[2] * 0.5f * (float)r->height;
     grad_mean2d[i] = sqrtf(gx * gx + gy * gy);
   }
   /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
-  float gcx = gs[SG_CX], gcy = gs[SG_CY];
+  float gcx = gs[S2_OX], gcy = gs[S2_OY];
   if (gcx != 0 || gcy != 0) {
     const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
     float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-    float gd = -(gcx * sf->cx + gcy * sf->cy) / d;
+    float gd = -(gcx * sf->ox + gcy * sf->oy) / d;
     for (int k = 0; k < 3; k++) {
       float f = t[k] / d;
       dTu[k] += gcx * f * Tw[k];
@@ -217,7 +396,7 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
   for (int a = 0; a < 3; a++) {
     dR[3 * a] = s[0] * gv[0][a];
     dR[3 * a + 1] = s[1] * gv[1][a];
-    dR[3 * a + 2] = sf->nsign * gs[SG_N + a];
+    dR[3 * a + 2] = mgs_raster2d_cold(r)[i].nsign * gs[S2_N + a];
   }
   float ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
   float ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
@@ -237,33 +416,88 @@ static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float
     float qv[4] = {w, x, y, z};
     for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += (gq[k] - qv[k] * qd) / qn;
   }
-  grad->opacity[gi] += gs[SG_OP] * sf->opacity * (1.0f - sf->opacity);
-  float drgb[3], ddir[3];
-  for (int k = 0; k < 3; k++) drgb[k] = ax->clamped[k] ? 0.0f : gs[SG_R + k];
-  mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, ax->dir, drgb,
-                  grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, ddir);
-  if (ax->dist > 0) {
-    float dd = ax->dir[0] * ddir[0] + ax->dir[1] * ddir[1] + ax->dir[2] * ddir[2];
-    for (int k = 0; k < 3; k++) dmean[k] += (ddir[k] - ax->dir[k] * dd) / ax->dist;
+  grad->opacity[gi] += gs[S2_OP] * sf->opacity * (1.0f - sf->opacity);
+  for (int k = 0; k < 3; k++) {
+    drgb_out[k] = ax->clamped[k] ? 0.0f : gs[S2_R + k];
+    dmean_out[k] = dmean[k];
   }
-  for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dmean[k];
+}
+
+/* The SH backward of the surfels blk[0..nl) (spread below 2^24), 16 at once, and their
+ * view-direction part of the mean gradient; then the mean gradients. */
+static void surfel_colours_backward(mgs_raster *r, const size_t *blk, int nl, float drgb[3][16], float dmean[3][16],
+                                    mgs_gaussians *grad, size_t gbase) {
+  const mgs_gaussians *g = r->g;
+  float ddir[3][16];
+#if defined(__AVX512F__)
+  float dirl[3][16];
+  int32_t lane[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
+    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
+    for (int k = 0; k < 3; k++) {
+      dirl[k][l] = ax->dir[k];
+      if (!ok) drgb[k][l] = 0.0f;
+    }
+  }
+  mgs_sh_backward16(r->s.sh_degree, g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane, (uint16_t)((1u << nl) - 1), dirl,
+                    (const float(*)[16])drgb, grad->sh_dc + 3 * (blk[0] - gbase),
+                    grad->sh_rest + (size_t)MGS_SH_REST_MAX * (blk[0] - gbase), ddir);
+#else
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l], gi = i - gbase;
+    float g3[3] = {drgb[0][l], drgb[1][l], drgb[2][l]}, o3[3];
+    mgs_sh_backward(r->s.sh_degree, g->sh_dc + 3 * i, g->sh_rest + (size_t)MGS_SH_REST_MAX * i, r->aux[i].dir, g3,
+                    grad->sh_dc + 3 * gi, grad->sh_rest + (size_t)MGS_SH_REST_MAX * gi, o3);
+    for (int k = 0; k < 3; k++) ddir[k][l] = o3[k];
+  }
+#endif
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l], gi = i - gbase;
+    const mgs_proj_aux *ax = &r->aux[i];
+    float dm[3] = {dmean[0][l], dmean[1][l], dmean[2][l]};
+    if (ax->dist > 0) {
+      float dd = ax->dir[0] * ddir[0][l] + ax->dir[1] * ddir[1][l] + ax->dir[2] * ddir[2][l];
+      for (int k = 0; k < 3; k++) dm[k] += (ddir[k][l] - ax->dir[k] * dd) / ax->dist;
+    }
+    for (int k = 0; k < 3; k++) grad->mean[3 * gi + k] += dm[k];
+  }
 }
 
 void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d) {
   cam_par cp;
   cam_par_init(r, &cp);
+  size_t blk[16];
+  float drgb[3][16], dmean[3][16];
+  int nl = 0, st = mgs_raster2d_slot_stride(r), nc = mgs_raster2d_slot_count(r);
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
-    float gs[SG_COUNT] = {0};
-    const float *q = r->sgrad + (size_t)r->gauss_off[i] * SG_STRIDE;
-    for (uint32_t k = 0; k < cnt; k++, q += SG_STRIDE)
-      for (int c = 0; c < SG_COUNT; c++) gs[c] += q[c];
+    float gs[S2_COUNT] = {0};
+    const float *q = r->sgrad + (size_t)r->gauss_off[i] * (size_t)st;
     int any = 0;
-    for (int c = 0; c < SG_COUNT; c++) any |= gs[c] != 0;
+    if (nc == 16) { /* one line a slot, zc from the side array */
+      v16f acc = v16f_set1(0.0f);
+      for (uint32_t k = 0; k < cnt; k++, q += st) acc += v16f_load(q);
+      v16f_store(gs, acc);
+      const float *zs = mgs_raster2d_zc_side(r) + r->gauss_off[i];
+      for (uint32_t k = 0; k < cnt; k++) gs[S2_ZC] += zs[k];
+      any = v16i_any(((v16i)acc << 1) != 0) || gs[S2_ZC] != 0; /* +-0 is no gradient */
+    } else {
+      for (uint32_t k = 0; k < cnt; k++, q += st)
+        for (int c = 0; c < nc; c++) gs[c] += q[c];
+      for (int c = 0; c < nc; c++) any |= gs[c] != 0;
+    }
     if (!any) continue;
-    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d);
+    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
+    float d3[3], m3[3];
+    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d, d3, m3);
+    for (int k = 0; k < 3; k++) { drgb[k][nl] = d3[k]; dmean[k][nl] = m3[k]; }
+    blk[nl++] = i;
+    if (nl == 16) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
   }
+  if (nl) surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase);
 }
 
 static int grow(void **p, size_t n, size_t sz) {
@@ -277,7 +511,7 @@ static int grow(void **p, size_t n, size_t sz) {
 mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err) {
   if (n > r->cap_surf) {
     size_t c = n + n / 4;
-    if (!grow((void **)&r->surf, c, sizeof(mgs_surfel)))
+    if (!grow((void **)&r->surf, c, sizeof(mgs_surf2d) + sizeof(mgs_surf2d_cold)))
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_project.c: out of memory for %zu surfels", n);
     r->cap_surf = c;
   }

@@ -10,63 +10,108 @@
 #include "core/mgs_log.h"
 #include "core/mgs_parallel.h"
 #include "render/raster_kernel.h"
+#include "render/raster_2dgs.h"
 
-/* The per-pixel evaluation both kernels share bit for bit. Along a tile row k = x Tw - Tu
- * varies with the column only (isect_cols, once per surfel and tile), l = y Tw - Tv with
- * the row only (scalars). */
+/* The per-pixel evaluation both kernels share bit for bit (raster_2dgs.h): along a tile
+ * row p = c0 (x - ox) + row constants, so the column parts (isect_cols) are made once per
+ * surfel and tile and a row costs three adds before the reciprocal. */
 typedef struct isect_cols {
-  v16f kx, ky, kz, ddx;
+  v16f xp;         /* pixel centre x - ox */
+  v16f qx, qy, qz; /* c0 xp */
+  v16f rx2;        /* rho2's x part */
 } isect_cols;
 
-MGS_VINLINE void isect_cols_init(const mgs_surfel *sf, v16f X, isect_cols *c) {
-  c->kx = X * sf->Tw[0] - sf->Tu[0];
-  c->ky = X * sf->Tw[1] - sf->Tu[1];
-  c->kz = X * sf->Tw[2] - sf->Tu[2];
-  c->ddx = v16f_set1(sf->cx) - X;
+MGS_VINLINE void isect_cols_init(const mgs_surf2d *sf, v16f X, isect_cols *c) {
+  c->xp = X - sf->ox;
+  c->qx = c->xp * sf->c0[0];
+  c->qy = c->xp * sf->c0[1];
+  c->qz = c->xp * sf->c0[2];
+  c->rx2 = MGS_2DGS_FILTER_INV2 * (c->xp * c->xp);
 }
 
 typedef struct isect_row {
-  v16f px, py, pz, sx, sy, rho3, rho2, z, G, raw, alpha;
-  float lx, ly, lz, ddy;
-  v16i m; /* valid: p.z != 0, z >= near, alpha >= 1/255 */
+  v16f ipz, sx, sy, rho3, rho2, z, G, raw, alpha;
+  v16i use3;  /* rho3 <= rho2: the ray-splat distance wins (else the filter, depth zc) */
+  float yp;   /* pixel centre y - oy */
+  v16i m;     /* valid: p.z != 0, z >= near, alpha >= 1/255 */
 } isect_row;
 
-MGS_VINLINE void isect_eval(const mgs_surfel *sf, const isect_cols *c, float Y, isect_row *o) {
-  const v16f zero = v16f_set1(0.0f);
-  o->lx = Y * sf->Tw[0] - sf->Tv[0];
-  o->ly = Y * sf->Tw[1] - sf->Tv[1];
-  o->lz = Y * sf->Tw[2] - sf->Tv[2];
-  o->px = c->ky * o->lz - c->kz * o->ly;
-  o->py = c->kz * o->lx - c->kx * o->lz;
-  o->pz = c->kx * o->ly - c->ky * o->lx;
-  v16i pok = o->pz != zero;
-  v16f ipz = v16f_rcp(v16f_select(pok, o->pz, v16f_set1(1.0f)));
-  o->sx = o->px * ipz;
-  o->sy = o->py * ipz;
-  o->rho3 = o->sx * o->sx + o->sy * o->sy;
-  o->ddy = sf->cy - Y;
-  o->rho2 = MGS_2DGS_FILTER_INV2 * (c->ddx * c->ddx + o->ddy * o->ddy);
+MGS_VINLINE void isect_eval(const mgs_surf2d *sf, const isect_cols *c, float Y, isect_row *o) {
+  const v16f one = v16f_set1(1.0f);
+  float yp = Y - sf->oy;
+  o->yp = yp;
+  v16f px = c->qx + (sf->c1[0] * yp + sf->c2[0]);
+  v16f py = c->qy + (sf->c1[1] * yp + sf->c2[1]);
+  v16f pz = c->qz + (sf->c1[2] * yp + sf->c2[2]);
+  v16i pok = pz != v16f_set1(0.0f);
+  o->ipz = v16f_rcp(v16f_select(pok, pz, one));
+  o->sx = px * o->ipz;
+  o->sy = py * o->ipz;
+  o->rho3 = v16f_fma(o->sx, o->sx, o->sy * o->sy);
+  o->rho2 = c->rx2 + MGS_2DGS_FILTER_INV2 * (yp * yp);
   v16f rho = v16f_min(o->rho3, o->rho2);
+  o->use3 = o->rho3 <= o->rho2;
   /* where the screen-space filter wins the depth is the centre's (as the authors': an
      edge-on surfel's ray-plane intersection lies arbitrarily far away) */
-  o->z = v16f_select(o->rho3 <= o->rho2, o->sx * sf->Tw[0] + o->sy * sf->Tw[1] + sf->Tw[2], v16f_set1(sf->Tw[2]));
+  o->z = v16f_select(o->use3, sf->det * o->ipz, v16f_set1(sf->zc));
   o->G = v16f_exp_neg(v16f_set1(-0.5f) * rho);
   o->raw = v16f_set1(sf->opacity) * o->G;
   o->alpha = v16f_min(v16f_set1(MGS_ALPHA_MAX), o->raw);
-  o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN)) & (rho == rho);
+  o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN));
 }
 
-/* Does the surfel's alpha >= 1/255 box miss the columns [x0, x0 + ncols)? */
-static inline int misses_cols(const mgs_surfel *sf, int x0, int ncols) {
-  return sf->xhi < (float)x0 + 0.5f || sf->xlo > (float)(x0 + ncols) - 0.5f;
+MGS_VINLINE v16f zero_minus(v16f a) { return v16f_set1(0.0f) - a; }
+MGS_VINLINE v16f v16f_abs(v16f a) { return (v16f)((v16i)a & v16i_set1(0x7fffffff)); }
+
+/* out[i] = sum of y[i]'s lanes, for 16 vectors at once (a transposing tree: 30 shuffles
+ * and 15 adds instead of 16 horizontal sums). */
+MGS_VINLINE v16f v16f_sum16(const v16f *y) {
+#if defined(__AVX512F__)
+  __m512 x[16], s[8], r[4], w[2];
+  /* the tree leaves source c + 4 j in lane 4 c + j */
+  for (int S = 0; S < 16; S++) x[S] = (__m512)y[4 * (S % 4) + S / 4];
+  for (int k = 0; k < 8; k++)
+    s[k] = _mm512_add_ps(_mm512_shuffle_f32x4(x[2 * k], x[2 * k + 1], 0x44), _mm512_shuffle_f32x4(x[2 * k], x[2 * k + 1], 0xEE));
+  for (int m = 0; m < 4; m++)
+    r[m] = _mm512_add_ps(_mm512_shuffle_f32x4(s[2 * m], s[2 * m + 1], 0x88), _mm512_shuffle_f32x4(s[2 * m], s[2 * m + 1], 0xDD));
+  for (int m = 0; m < 2; m++)
+    w[m] = _mm512_add_ps(_mm512_shuffle_ps(r[2 * m], r[2 * m + 1], 0x44), _mm512_shuffle_ps(r[2 * m], r[2 * m + 1], 0xEE));
+  return (v16f)_mm512_add_ps(_mm512_shuffle_ps(w[0], w[1], 0x88), _mm512_shuffle_ps(w[0], w[1], 0xDD));
+#else
+  v16f o;
+  for (int i = 0; i < 16; i++) o[i] = v16f_sum(y[i]);
+  return o;
+#endif
 }
 
-/* Rows [*lo, *hi] of the tile starting at pixel row y0 whose centres lie in the surfel's
- * [ylo, yhi]. */
-static inline void row_span(const mgs_surfel *sf, int y0, int nrows, int *lo, int *hi) {
-  float a = sf->ylo - 0.5f - (float)y0, b = sf->yhi - 0.5f - (float)y0;
-  *lo = a <= 0 ? 0 : (a >= (float)nrows ? nrows : (int)ceilf(a));
-  *hi = b < 0 ? -1 : (b >= (float)(nrows - 1) ? nrows - 1 : (int)floorf(b));
+MGS_VINLINE uint32_t v16i_bits(v16i m) {
+#if defined(__AVX512F__)
+  return _mm512_test_epi32_mask((__m512i)m, (__m512i)m);
+#else
+  uint32_t b = 0;
+  for (int i = 0; i < 16; i++) b |= (uint32_t)(m[i] != 0) << i;
+  return b;
+#endif
+}
+
+/* Bit y set: row y of the tile at (x0, y0) (nrows x ncols) has pixel centres where the
+ * surfel can reach alpha >= 1/255 (the region of raster_2dgs.h), one lane per row. */
+MGS_VINLINE uint32_t row_bits(const mgs_surf2d *sf, int x0, int y0, int nrows, int ncols) {
+  const v16f lanes = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+  const v16f inf = v16f_set1(INFINITY), rf = v16f_set1(sf->rf);
+  v16f yl = lanes + ((float)y0 + 0.5f - sf->oy);
+  v16f d = yl - sf->yc;
+  v16f hw2 = sf->h0 - sf->kq * (d * d);
+  v16i cv = hw2 >= v16f_set1(0.0f);
+  v16f hw = v16f_sqrt(v16f_and(cv, hw2));
+  v16f xm = sf->xc + sf->sl * d;
+  v16f lo = v16f_select(cv, xm - hw, inf), hi = v16f_select(cv, xm + hw, zero_minus(inf));
+  v16i dv = (yl <= rf) & (yl >= zero_minus(rf));
+  lo = v16f_select(dv, v16f_min(lo, zero_minus(rf)), lo);
+  hi = v16f_select(dv, v16f_max(hi, rf), hi);
+  float xmin = (float)x0 + 0.5f - sf->ox - 0.05f, xmax = (float)(x0 + ncols) - 0.5f - sf->ox + 0.05f;
+  v16i hit = (lo - v16f_set1(1e-3f) * v16f_abs(lo) <= v16f_set1(xmax)) & (hi + v16f_set1(1e-3f) * v16f_abs(hi) >= v16f_set1(xmin));
+  return v16i_bits(hit) & ((1u << nrows) - 1u);
 }
 
 MGS_VINLINE v16f depth_map(v16f z) {
@@ -91,26 +136,31 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
   v16f X;
   v16i outside;
   for (int i = 0; i < 16; i++) { X[i] = (float)(x0 + i) + 0.5f; outside[i] = i < ncols ? 0 : -1; }
-  int rowdone[MGS_TILE_SIZE];
+  uint32_t rowdone = 0; /* bit y: every pixel of row y has terminated */
   for (int y = 0; y < MGS_TILE_SIZE; y++) {
     T[y] = v16f_set1(1.0f);
     for (int a = 0; a < NACC; a++) A[a][y] = v16f_set1(0.0f);
     NC[y] = MID[y] = v16i_set1(0);
     DONE[y] = outside;
-    rowdone[y] = y >= nrows;
   }
+  const mgs_surf2d_cold *cold = mgs_raster2d_cold(r);
   const v16f one = v16f_set1(1.0f), half = v16f_set1(0.5f), tmin = v16f_set1(MGS_T_MIN);
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1], evals = 0;
+  const mgs_surf2d *surf = mgs_raster2d_surf(r);
   for (uint32_t j = start; j < end; j++) {
-    const mgs_surfel *sf = &r->surf[r->isect_idx[j]];
+    if (j + 8 < end) { /* the records are gathered: fetch ahead */
+      const char *nx = (const char *)&surf[r->isect_idx[j + 8]];
+      __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_surf2d) - 1);
+    }
+    const mgs_surf2d *sf = &surf[r->isect_idx[j]];
     v16i jid = v16i_set1((int32_t)(j - start + 1));
-    int ylo, yhi;
-    row_span(sf, y0, nrows, &ylo, &yhi);
-    if (ylo > yhi || misses_cols(sf, x0, ncols)) continue;
+    uint32_t rows = row_bits(sf, x0, y0, nrows, ncols) & ~rowdone;
+    if (!rows) continue;
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
-    for (int y = ylo; y <= yhi; y++) {
-      if (rowdone[y]) continue;
+    const mgs_surf2d_cold *cd = geo ? &cold[r->isect_idx[j]] : NULL;
+    for (; rows; rows &= rows - 1) {
+      int y = __builtin_ctz(rows);
       evals++;
       isect_row e;
       isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
@@ -118,7 +168,7 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
       v16f testT = T[y] * (one - e.alpha);
       v16i nd = m & (testT < tmin);
       DONE[y] |= nd;
-      if (v16i_any(nd)) rowdone[y] = !v16i_any(~DONE[y]);
+      if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
       m &= ~nd;
       if (!v16i_any(m)) continue;
       v16f w = v16f_and(m, e.alpha * T[y]);
@@ -132,10 +182,13 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
         v16i med = m & (T[y] > half);
         A[MED][y] = v16f_select(med, e.z, A[MED][y]);
         MID[y] = (med & jid) | (~med & MID[y]);
-        A[N0][y] += w * sf->n[0]; A[N1][y] += w * sf->n[1]; A[N2][y] += w * sf->n[2];
+        A[N0][y] += w * cd->n[0]; A[N1][y] += w * cd->n[1]; A[N2][y] += w * cd->n[2];
       }
-      A[DZ][y] += w * e.z;
-      A[CR][y] += w * sf->rgb[0]; A[CG][y] += w * sf->rgb[1]; A[CB][y] += w * sf->rgb[2];
+      /* (-std=c17 contracts nothing: the fused multiply-adds are explicit) */
+      A[DZ][y] = v16f_fma(w, e.z, A[DZ][y]);
+      A[CR][y] = v16f_fma(w, v16f_set1(sf->rgb[0]), A[CR][y]);
+      A[CG][y] = v16f_fma(w, v16f_set1(sf->rgb[1]), A[CG][y]);
+      A[CB][y] = v16f_fma(w, v16f_set1(sf->rgb[2]), A[CB][y]);
       T[y] = v16f_select(m, testT, T[y]);
       NC[y] = (m & jid) | (~m & NC[y]);
     }
@@ -216,6 +269,8 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
   int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
+  const int st = mgs_raster2d_slot_stride(r); /* S2_STRIDE_MAX exactly when geo */
+  float *zside = mgs_raster2d_zc_side(r);
   if (start == end) { r->tile_evals[tile] = 0; return; }
   enum { GR, GG, GB, GD, GN0, GN1, GN2, GM, GDI, FM1, FM2, FA, K, FM0, NIN };
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], I[NIN][MGS_TILE_SIZE];
@@ -262,24 +317,38 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   const v16f one = v16f_set1(1.0f), zero = v16f_set1(0.0f), amax = v16f_set1(MGS_ALPHA_MAX);
   const float F = MGS_2DGS_FAR, N = MGS_2DGS_NEAR;
   const v16f dmdz_c = v16f_set1(F * N / (F - N));
-  for (uint32_t j = start + (uint32_t)maxn; j < end; j++)
-    memset(r->sgrad + (size_t)r->isect_slot[j] * SG_STRIDE, 0, SG_STRIDE * sizeof(float));
+  /* rho2 = F |pixel - o|^2: dL/do = -F/2 (-2) sum q (pixel - o) = F sum q (pixel - o) */
+  v16f slot_fac = one;
+  slot_fac[S2_OX] = slot_fac[S2_OY] = MGS_2DGS_FILTER_INV2;
+  for (uint32_t j = start + (uint32_t)maxn; j < end; j++) {
+    memset(r->sgrad + (size_t)r->isect_slot[j] * st, 0, (size_t)(geo ? S2_COUNT : 16) * sizeof(float));
+    if (!geo) zside[r->isect_slot[j]] = 0;
+  }
+  const mgs_surf2d *surf = mgs_raster2d_surf(r);
   uint32_t evals = 0;
   for (uint32_t j = start + (uint32_t)maxn; j-- > start;) {
-    const mgs_surfel *sf = &r->surf[r->isect_idx[j]];
-    float *out = r->sgrad + (size_t)r->isect_slot[j] * SG_STRIDE;
+    if (j >= start + 8) { /* random slot and record: fetch ahead */
+      __builtin_prefetch(r->sgrad + (size_t)r->isect_slot[j - 8] * st, 1);
+      const char *nx = (const char *)&surf[r->isect_idx[j - 8]];
+      __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_surf2d) - 1);
+    }
+    const mgs_surf2d *sf = &surf[r->isect_idx[j]];
+    float *out = r->sgrad + (size_t)r->isect_slot[j] * st;
     v16i jid = v16i_set1((int32_t)(j - start));
     v16i jid1 = v16i_set1((int32_t)(j - start + 1));
-    v16f ac[SG_COUNT];
-    for (int c = 0; c < SG_COUNT; c++) ac[c] = zero;
+    /* per lane, summed over rows: dL/dp (P*), dL/dp times the row's y - oy (PY*), dL/ddet,
+       dL/drho2 (times -1/2: Q2) and Q2 (y - oy); the column factor x - ox is the same in
+       every row, applied once at the end */
+    v16f PX = zero, PY = zero, PZ = zero, PXY = zero, PYY = zero, PZY = zero, AD = zero, Q2 = zero, Q2Y = zero;
+    v16f AOP = zero, AR = zero, AG = zero, AB = zero, AZC = zero, AN0 = zero, AN1 = zero, AN2 = zero;
     const v16f cr = v16f_set1(sf->rgb[0]), cg = v16f_set1(sf->rgb[1]), cb = v16f_set1(sf->rgb[2]);
-    const v16f n0 = v16f_set1(sf->n[0]), n1 = v16f_set1(sf->n[1]), n2 = v16f_set1(sf->n[2]);
-    int ylo, yhi;
-    row_span(sf, y0, nrows, &ylo, &yhi);
-    if (misses_cols(sf, x0, ncols)) yhi = -1;
+    const mgs_surf2d_cold *cd = geo ? &mgs_raster2d_cold(r)[r->isect_idx[j]] : NULL;
+    const v16f n0 = v16f_set1(geo ? cd->n[0] : 0.0f), n1 = v16f_set1(geo ? cd->n[1] : 0.0f), n2 = v16f_set1(geo ? cd->n[2] : 0.0f);
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
-    for (int y = ylo; y <= yhi; y++) {
+    int touched = 0;
+    for (uint32_t rows = row_bits(sf, x0, y0, nrows, ncols); rows; rows &= rows - 1) {
+      int y = __builtin_ctz(rows);
       if ((int32_t)(j - start) >= rowmax[y]) continue;
       evals++;
       float Y = (float)(y0 + y) + 0.5f;
@@ -287,53 +356,63 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       isect_eval(sf, &ic, Y, &e);
       v16i m = e.m & (jid < NC[y]);
       if (!v16i_any(m)) continue;
-      v16f inv = one / (one - e.alpha);
+      touched = 1;
+      v16f inv = v16f_rcp(one - e.alpha);
       v16f Tn = v16f_select(m, T[y] * inv, T[y]);
       T[y] = Tn;
       v16f w = v16f_and(m, e.alpha * Tn);
-      v16f val = cr * I[GR][y] + cg * I[GG][y] + cb * I[GB][y] + e.z * I[GD][y];
+      v16f zm = v16f_and(m, e.z);
+      v16f val = v16f_fma(cr, I[GR][y], v16f_fma(cg, I[GG][y], v16f_fma(cb, I[GB][y], zm * I[GD][y])));
       v16f md = zero;
       if (geo) {
         md = v16f_select(m, depth_map(e.z) - I[FM0][y], zero);
         val += n0 * I[GN0][y] + n1 * I[GN1][y] + n2 * I[GN2][y] +
                I[GDI][y] * (md * md * I[FA][y] - 2.0f * md * I[FM1][y] + I[FM2][y]);
-        ac[SG_N] += w * I[GN0][y]; ac[SG_N + 1] += w * I[GN1][y]; ac[SG_N + 2] += w * I[GN2][y];
+        AN0 = v16f_fma(w, I[GN0][y], AN0); AN1 = v16f_fma(w, I[GN1][y], AN1); AN2 = v16f_fma(w, I[GN2][y], AN2);
       }
-      ac[SG_R] += w * I[GR][y]; ac[SG_G] += w * I[GG][y]; ac[SG_B] += w * I[GB][y];
-      v16f dLda = Tn * val - (S[y] + I[K][y]) * inv;
-      S[y] += val * w;
+      AR = v16f_fma(w, I[GR][y], AR); AG = v16f_fma(w, I[GG][y], AG); AB = v16f_fma(w, I[GB][y], AB);
+      v16f Sy = S[y];
+      v16f dLda = v16f_fma(zero - (Sy + I[K][y]), inv, Tn * val);
+      S[y] = v16f_fma(val, w, Sy);
       dLda = v16f_and(m & (e.raw < amax), dLda);
-      ac[SG_OP] += e.G * dLda;
-      v16f dLdG = v16f_set1(sf->opacity) * dLda;
+      AOP = v16f_fma(e.G, dLda, AOP);
+      v16f q = e.raw * dLda; /* dL/drho = -q/2 */
       /* depth of the intersection */
       v16f dLdz = w * I[GD][y];
       if (geo) {
         v16f iz = one / v16f_select(m, e.z, one);
         dLdz += v16f_and(m & (MID[y] == jid1), I[GM][y]) + 2.0f * w * (md * I[FA][y] - I[FM1][y]) * I[GDI][y] * dmdz_c * iz * iz;
+        dLdz = v16f_and(m, dLdz);
       }
-      dLdz = v16f_and(m, dLdz);
-      v16i use3 = e.rho3 <= e.rho2;
-      v16f gGs = v16f_and(use3, zero - e.G * dLdG); /* d rho3/ds = 2 s, dG/drho = -G/2 */
-      v16f dLdz3 = v16f_and(use3, dLdz); /* the filter's depth is Tw[2]: no path through s */
-      v16f gsx = gGs * e.sx + dLdz3 * sf->Tw[0];
-      v16f gsy = gGs * e.sy + dLdz3 * sf->Tw[1];
-      v16f g2 = v16f_and(m & ~use3, v16f_set1(-0.5f * MGS_2DGS_FILTER_INV2 * 2.0f) * e.G * dLdG);
-      ac[SG_CX] += g2 * ic.ddx;
-      ac[SG_CY] += g2 * e.ddy;
-      v16f ipz = v16f_rcp(v16f_select(m, e.pz, one));
-      v16f gpx = gsx * ipz, gpy = gsy * ipz, gpz = zero - (gpx * e.sx + gpy * e.sy);
-      gpx = v16f_and(m, gpx); gpy = v16f_and(m, gpy); gpz = v16f_and(m, gpz);
-      /* p = k x l: dL/dk = l x g, dL/dl = g x k */
-      v16f dkx = e.ly * gpz - e.lz * gpy, dky = e.lz * gpx - e.lx * gpz, dkz = e.lx * gpy - e.ly * gpx;
-      v16f dlx = gpy * ic.kz - gpz * ic.ky, dly = gpz * ic.kx - gpx * ic.kz, dlz = gpx * ic.ky - gpy * ic.kx;
-      ac[SG_T + 0] -= dkx; ac[SG_T + 1] -= dky; ac[SG_T + 2] -= dkz;
-      ac[SG_T + 3] -= dlx; ac[SG_T + 4] -= dly; ac[SG_T + 5] -= dlz;
-      ac[SG_T + 6] += X * dkx + Y * dlx + dLdz3 * e.sx;
-      ac[SG_T + 7] += X * dky + Y * dly + dLdz3 * e.sy;
-      ac[SG_T + 8] += X * dkz + Y * dlz + dLdz;
+      v16i use3 = m & e.use3;
+      /* rho3 = |p.xy|^2 / p.z^2, z = det / p.z */
+      v16f a = zero - q * e.ipz;
+      v16f gpx = v16f_and(use3, a * e.sx), gpy = v16f_and(use3, a * e.sy);
+      v16f gz = v16f_and(use3, dLdz * e.ipz); /* the filter's depth zc: no path through p */
+      AZC += v16f_and(m & ~use3, dLdz);
+      v16f gpz = zero - v16f_fma(gz, zm, v16f_and(use3, a * e.rho3));
+      v16f yp = v16f_set1(e.yp);
+      PX += gpx; PY += gpy; PZ += gpz;
+      PXY = v16f_fma(gpx, yp, PXY); PYY = v16f_fma(gpy, yp, PYY); PZY = v16f_fma(gpz, yp, PZY);
+      AD += gz;
+      v16f q2 = v16f_and(m & ~use3, q);
+      Q2 += q2;
+      Q2Y = v16f_fma(q2, yp, Q2Y);
     }
-    for (int c = 0; c < SG_COUNT; c++) out[c] = v16f_sum(ac[c]);
-    for (int c = SG_COUNT; c < SG_STRIDE; c++) out[c] = 0;
+    if (!touched) { /* no pixel: a zero slot */
+      memset(out, 0, (size_t)(geo ? S2_COUNT : 16) * sizeof(float));
+      if (!geo) zside[r->isect_slot[j]] = 0;
+      continue;
+    }
+    /* the 16 sums in slot order, one transposing reduction */
+    v16f acc[16] = {PX * ic.xp, PY * ic.xp, PZ * ic.xp, PXY, PYY, PZY, PX, PY, PZ, AD, Q2 * ic.xp, Q2Y, AOP, AR, AG, AB};
+    v16f_store(out, v16f_sum16(acc) * slot_fac);
+    if (geo) out[S2_ZC] = v16f_sum(AZC);
+    else zside[r->isect_slot[j]] = v16f_sum(AZC);
+    if (geo) {
+      out[S2_N] = v16f_sum(AN0); out[S2_N + 1] = v16f_sum(AN1); out[S2_N + 2] = v16f_sum(AN2);
+
+    }
   }
   r->tile_evals[tile] = evals;
 }
@@ -349,7 +428,7 @@ mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, co
   if (r->n_isect > r->cap_sgrad) {
     size_t c = r->n_isect + r->n_isect / 4;
     free(r->sgrad);
-    r->sgrad = aligned_alloc(64, (c ? c : 1) * SG_STRIDE * sizeof(float));
+    r->sgrad = aligned_alloc(64, (c ? c : 1) * S2_STRIDE_MAX * sizeof(float));
     r->cap_sgrad = r->sgrad ? c : 0;
     if (!r->sgrad)
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_2dgs_tiles.c: out of memory for %zu intersections", r->n_isect);

@@ -29,22 +29,6 @@ typedef struct mgs_proj_aux {
   uint8_t clamped[3];  /* colour channel clamped at 0 */
 } mgs_proj_aux;
 
-/* What the tile kernels need of one projected 2DGS surfel (raster_2dgs_*.c). */
-typedef struct mgs_surfel {
-  float Tu[3], Tv[3], Tw[3]; /* rows of the splat-to-pixel map: (x w, y w, w) = T (u, v, 1) */
-  float cx, cy;              /* centre of the 3-sigma box: the screen-space filter's centre */
-  float opacity;             /* sigmoid(logit) */
-  float rgb[3];              /* SH colour, clamped at 0 */
-  float n[3];                /* world normal (third axis of R) turned towards the camera */
-  float nsign;               /* n = nsign * R e3 */
-  float ylo, yhi;            /* pixel-centre rows and columns that can hold alpha >= 1/255 */
-  float xlo, xhi;            /* (a conservative box) */
-} mgs_surfel;
-
-/* Sum over one tile's pixels of the gradient w.r.t. one surfel's values (SG_STRIDE floats
- * per intersection). */
-enum { SG_T = 0 /* 9: Tu, Tv, Tw */, SG_CX = 9, SG_CY, SG_OP, SG_R, SG_G, SG_B, SG_N, SG_COUNT = SG_N + 3 };
-#define SG_STRIDE 32
 #define MGS_2DGS_NEAR 0.2f        /* ray-splat depths below are skipped (the authors' near_n) */
 #define MGS_2DGS_FAR 100.0f       /* far_n of the distortion's depth mapping */
 #define MGS_2DGS_FILTER_INV2 2.0f /* rho2d = 2 |pixel - centre|^2: a sqrt(2)/2 px filter */
@@ -106,8 +90,8 @@ struct mgs_raster {
   /* 2DGS (raster_2dgs_*.c): set when the forward's model is MGS_MODEL_2DGS */
   int surfel;
   size_t cap_surf, cap_sgrad, cap_spix;
-  mgs_surfel *surf;
-  float *sgrad;            /* SG_STRIDE floats per intersection (backward) */
+  void *surf;              /* the surfel records (render/raster_2dgs.h) */
+  float *sgrad;            /* the backward's per-intersection slots (render/raster_2dgs.h) */
   float *s_normal, *s_median, *s_dist, *s_m1, *s_m2, *s_m0; /* per pixel (normal: 3) */
   int32_t *s_medid;        /* 1-based tile-list position of the median contributor, 0: none */
   float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */

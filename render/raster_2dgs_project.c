@@ -236,6 +236,19 @@ static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
   }
 }
 
+#if defined(__AVX512F__)
+/* A block's view directions and row offsets from its first surfel, lane by lane (lanes
+ * past nl repeat the first surfel at offset 0). */
+static void block_lanes(const mgs_raster *r, const size_t *blk, int nl, float dirl[3][16], int32_t lane[16]) {
+  for (int l = 0; l < 16; l++) {
+    int ok = l < nl;
+    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
+    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
+    for (int k = 0; k < 3; k++) dirl[k][l] = ax->dir[k];
+  }
+}
+#endif
+
 /* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
  * 16 at once; a non-finite colour culls its surfel. */
 static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
@@ -245,12 +258,7 @@ static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
 #if defined(__AVX512F__)
   float dirl[3][16];
   int32_t lane[16];
-  for (int l = 0; l < 16; l++) {
-    int ok = l < nl;
-    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
-    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
-    for (int k = 0; k < 3; k++) dirl[k][l] = ax->dir[k];
-  }
+  block_lanes(r, blk, nl, dirl, lane);
   mgs_sh_eval16(r->s.sh_degree, g->sh_dc + 3 * blk[0], g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane,
                 (uint16_t)((1u << nl) - 1), dirl, rgbl);
 #else
@@ -432,15 +440,9 @@ static void surfel_colours_backward(mgs_raster *r, const size_t *blk, int nl, fl
 #if defined(__AVX512F__)
   float dirl[3][16];
   int32_t lane[16];
-  for (int l = 0; l < 16; l++) {
-    int ok = l < nl;
-    const mgs_proj_aux *ax = &r->aux[blk[ok ? l : 0]];
-    lane[l] = ok ? (int32_t)(blk[l] - blk[0]) : 0;
-    for (int k = 0; k < 3; k++) {
-      dirl[k][l] = ax->dir[k];
-      if (!ok) drgb[k][l] = 0.0f;
-    }
-  }
+  block_lanes(r, blk, nl, dirl, lane);
+  for (int l = nl; l < 16; l++)
+    for (int k = 0; k < 3; k++) drgb[k][l] = 0.0f;
   mgs_sh_backward16(r->s.sh_degree, g->sh_rest + (size_t)MGS_SH_REST_MAX * blk[0], lane, (uint16_t)((1u << nl) - 1), dirl,
                     (const float(*)[16])drgb, grad->sh_dc + 3 * (blk[0] - gbase),
                     grad->sh_rest + (size_t)MGS_SH_REST_MAX * (blk[0] - gbase), ddir);

@@ -153,6 +153,13 @@ static mgs_status variant_front(const exp_report_in *in, const char *ds, const c
   return MGS_OK;
 }
 
+/* A front as one sentence's end: "N Gaussians at P dB, ...". */
+static void print_front(FILE *f, const mgs_stats_point *front, size_t nf) {
+  if (!nf) fprintf(f, "none.\n");
+  for (size_t k = 0; k < nf; k++) fprintf(f, "%s%.0f Gaussians at %.3f dB", k ? ", " : "", front[k].count, front[k].psnr);
+  fprintf(f, "%s", nf ? ".\n" : "");
+}
+
 /* The variant var's changes are measured against (--base V=B; baseline otherwise). */
 static const char *base_of(const exp_report_in *in, const char *var) {
   for (size_t v = 0; v < in->n_variants; v++)
@@ -764,9 +771,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       size_t nf = 0;
       if ((st = variant_front(in, ds, EXP_BASE, &front, &nf, err))) break;
       fprintf(f, "\nThe %s's Pareto front (what H3 compares with; every run, every knob setting): ", EXP_BASE);
-      if (!nf) fprintf(f, "none.\n");
-      for (size_t k = 0; k < nf; k++) fprintf(f, "%s%.0f Gaussians at %.3f dB", k ? ", " : "", front[k].count, front[k].psnr);
-      fprintf(f, "%s", nf ? ".\n" : "");
+      print_front(f, front, nf);
       cJSON *jf = cJSON_AddArrayToObject(od, "baseline_front");
       for (size_t k = 0; k < nf; k++) {
         cJSON *o = cJSON_CreateObject();
@@ -785,9 +790,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       size_t nf = 0;
       if ((st = variant_front(in, ds, b, &front, &nf, err))) break;
       fprintf(f, "\nThe Pareto front of %s (what H3 compares the variants measured against it with): ", b);
-      if (!nf) fprintf(f, "none.\n");
-      for (size_t k = 0; k < nf; k++) fprintf(f, "%s%.0f Gaussians at %.3f dB", k ? ", " : "", front[k].count, front[k].psnr);
-      fprintf(f, "%s", nf ? ".\n" : "");
+      print_front(f, front, nf);
       free(front);
     }
     if (st) break;

@@ -40,7 +40,7 @@ typedef struct result {
 } result;
 
 /* ---- child: one training run, one line of results on stdout ---- */
-static int child(const char *data, int conf, int iters, int warmup, int cache_mb, int size) {
+static int child(const char *data, int conf, int iters, int warmup, int cache_mb, int size, int analysis) {
   mgs_error err;
   mgs_error_clear(&err);
   mgs_dataset_options dopt;
@@ -86,7 +86,7 @@ static int child(const char *data, int conf, int iters, int warmup, int cache_mb
          hits + misses ? (double)hits / (double)(hits + misses) : -1.0, setup, mgs_trainer_last_loss(t),
          (ph1[0] - ph0[0]) * per, (ph1[2] + ph1[4] - ph0[2] - ph0[4]) * per);
   fflush(stdout);
-  if (conf == CONF_SCALE) {
+  if (conf == CONF_SCALE && analysis) {
     /* the Morse analysis at a fixed voxel size (128 voxels along the diagonal of city 1),
        from scratch, then after the Gaussians of one corner block (1/N² of the city) changed
        their opacity: incremental, only that block's α leaves rebuilt */
@@ -123,10 +123,10 @@ static int child(const char *data, int conf, int iters, int warmup, int cache_mb
 }
 
 static int run_child(const char *self, const char *data, int conf, int iters, int warmup, int cache_mb, int size,
-                     result *r) {
+                     int analysis, result *r) {
   char cmd[8192];
-  snprintf(cmd, sizeof cmd, "'%s' bench scale --child '%s' --conf %d --iters %d --warmup %d --cache-mb %d --sizes %d",
-           self, data, conf, iters, warmup, cache_mb, size);
+  snprintf(cmd, sizeof cmd, "'%s' bench scale --child '%s' --conf %d --iters %d --warmup %d --cache-mb %d --sizes %d%s",
+           self, data, conf, iters, warmup, cache_mb, size, analysis ? "" : " --no-analysis");
   FILE *p = popen(cmd, "r");
   if (!p) return 0;
   char line[512];
@@ -223,6 +223,10 @@ static void usage(FILE *f) {
           "  --iters N        training iterations per run (60), of which --warmup N (10) untimed\n"
           "  --res PX         image width and height (160)\n"
           "  --cache-mb M     image cache of the scale runs (4)\n"
+          "  --points N       initial points (= Gaussians) per city block (10000); e.g. --sizes 8 --points 156250\n"
+          "                   trains 10M Gaussians\n"
+          "  --configs LIST   reference,scale (both)\n"
+          "  --no-analysis    skip the Morse analysis of the trained scale models\n"
           "  --data DIR       keep the city datasets here (reused when present; default a temp folder)\n"
           "  -o, --output DIR scale.md, scale.csv, scale.png (bench/scale)\n");
 }
@@ -232,9 +236,11 @@ int mgs_bench_scale(int argc, char **argv) {
       {"sizes", required_argument, 0, 's'}, {"iters", required_argument, 0, 'i'}, {"warmup", required_argument, 0, 'w'},
       {"res", required_argument, 0, 'r'}, {"cache-mb", required_argument, 0, 'c'}, {"data", required_argument, 0, 'd'},
       {"output", required_argument, 0, 'o'}, {"child", required_argument, 0, 'C'}, {"conf", required_argument, 0, 'k'},
+      {"points", required_argument, 0, 'p'}, {"configs", required_argument, 0, 'g'}, {"no-analysis", no_argument, 0, 'n'},
       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   const char *sizes_arg = "1,2,4", *data = NULL, *out = "bench/scale", *child_data = NULL;
-  int iters = 60, warmup = 10, res = 160, cache_mb = 4, conf = 0;
+  int iters = 60, warmup = 10, res = 160, cache_mb = 4, conf = 0, analysis = 1, run_conf[N_CONF] = {1, 1};
+  long points = 10000;
   optind = 1;
   opterr = 0;
   int c;
@@ -249,6 +255,12 @@ int mgs_bench_scale(int argc, char **argv) {
     case 'o': out = optarg; break;
     case 'C': child_data = optarg; break;
     case 'k': conf = atoi(optarg); break;
+    case 'p': points = strtol(optarg, NULL, 10); break;
+    case 'n': analysis = 0; break;
+    case 'g':
+      run_conf[CONF_REF] = strstr(optarg, "reference") != NULL;
+      run_conf[CONF_SCALE] = strstr(optarg, "scale") != NULL;
+      break;
     case 'h': usage(stdout); return 0;
     default: fprintf(stderr, "morsegs bench scale: bad option %s\n", argv[optind - 1]); usage(stderr); return 2;
     }
@@ -262,11 +274,12 @@ int mgs_bench_scale(int argc, char **argv) {
     p = *end == ',' ? end + 1 : end;
     if (*end && *end != ',') { fprintf(stderr, "morsegs bench scale: bad --sizes '%s'\n", sizes_arg); return 2; }
   }
-  if (iters < 2 || warmup < 0 || warmup >= iters || res < 16 || res > 4096 || cache_mb < 1 || conf < 0 || conf >= N_CONF) {
-    fprintf(stderr, "morsegs bench scale: bad --iters/--warmup/--res/--cache-mb\n");
+  if (iters < 2 || warmup < 0 || warmup >= iters || res < 16 || res > 4096 || cache_mb < 1 || conf < 0 || conf >= N_CONF ||
+      points < 1 || points > 100000000 || !(run_conf[0] || run_conf[1])) {
+    fprintf(stderr, "morsegs bench scale: bad --iters/--warmup/--res/--cache-mb/--points/--configs\n");
     return 2;
   }
-  if (child_data) return child(child_data, conf, iters, warmup, cache_mb, sizes[0]);
+  if (child_data) return child(child_data, conf, iters, warmup, cache_mb, sizes[0], analysis);
 
   char self[4096];
   ssize_t sl = readlink("/proc/self/exe", self, sizeof self - 1);
@@ -288,7 +301,8 @@ int mgs_bench_scale(int argc, char **argv) {
   memset(results, 0, sizeof results);
   char dirs[MAX_SIZES][4096];
   for (int s = 0; s < n_sizes; s++) {
-    snprintf(dirs[s], sizeof dirs[s], "%s/city%d_%d", base, sizes[s], res);
+    if (points == 10000) snprintf(dirs[s], sizeof dirs[s], "%s/city%d_%d", base, sizes[s], res);
+    else snprintf(dirs[s], sizeof dirs[s], "%s/city%d_%d_p%ld", base, sizes[s], res, points);
     if (mgs_path_exists(dirs[s])) continue;
     mgs_mesh *mesh = NULL;
     if (mgs_assets_city(sizes[s], 1, &mesh, &err) != MGS_OK) return mgs_cli_fail("bench scale", &err);
@@ -299,7 +313,7 @@ int mgs_bench_scale(int argc, char **argv) {
     o.n_test = 0;
     o.width = o.height = res;
     o.spp = 2;
-    o.init_points = (size_t)10000 * sizes[s] * sizes[s];
+    o.init_points = (size_t)points * (size_t)sizes[s] * (size_t)sizes[s];
     o.quiet = 1;
     o.mesh_name = "builtin:city";
     double t0 = mgs_now();
@@ -311,7 +325,8 @@ int mgs_bench_scale(int argc, char **argv) {
   for (int s = 0; s < n_sizes; s++)
     for (int k = 0; k < N_CONF; k++) {
       result *r = &results[s * N_CONF + k];
-      if (!run_child(self, dirs[s], k, iters, warmup, cache_mb, sizes[s], r))
+      if (!run_conf[k]) continue;
+      if (!run_child(self, dirs[s], k, iters, warmup, cache_mb, sizes[s], analysis, r))
         fprintf(stderr, "morsegs bench scale: the %s run at N = %d failed\n", conf_name[k], sizes[s]);
       else
         printf("N=%d %-9s %7zu Gaussians %4zu views: %.4f s/iter (fwd %.1f ms, bwd+Adam %.1f ms), peak RSS %.0f MiB, "
@@ -362,9 +377,9 @@ int mgs_bench_scale(int argc, char **argv) {
   snprintf(path, sizeof path, "%s/scale.md", out);
   f = fopen(path, "w");
   if (!f) { fprintf(stderr, "morsegs bench scale: cannot write %s\n", path); return 1; }
-  fprintf(f, "`morsegs bench scale --sizes %s --iters %d --warmup %d --res %d --cache-mb %d`, MGS_THREADS=%s; "
+  fprintf(f, "`morsegs bench scale --sizes %s --iters %d --warmup %d --res %d --cache-mb %d --points %ld%s`, MGS_THREADS=%s; "
              "load average before: %s; after: %s.\n\n",
-          sizes_arg, iters, warmup, res, cache_mb, getenv("MGS_THREADS") ? getenv("MGS_THREADS") : "(all)", load0, load1);
+          sizes_arg, iters, warmup, res, cache_mb, points, analysis ? "" : " --no-analysis", getenv("MGS_THREADS") ? getenv("MGS_THREADS") : "(all)", load0, load1);
   fprintf(f, "| N | content | config | Gaussians | views | s/iter | vs N=%d | forward ms | backward+Adam ms | peak RSS MiB | "
              "projected/iter | cache hits |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n", sizes[0]);
   for (int k = 0; k < n_sizes * N_CONF; k++) {
@@ -386,9 +401,15 @@ int mgs_bench_scale(int argc, char **argv) {
     fprintf(f, " Measured: peak RSS grows by **%.0f B per added Gaussian** in the scale runs from N = %d to N = %d "
                "(everything included: the dataset's cameras and points, the city's images through a fixed cache).",
             marginal, sizes[lo], sizes[hi]);
+  size_t largest = 0;
+  for (int k = 0; k < n_sizes * N_CONF; k++)
+    if (results[k].ok && results[k].gaussians > largest) largest = results[k].gaussians;
   double per = marginal > 0 ? fmax(marginal, b_total) : b_total;
-  fprintf(f, " At %.0f B a Gaussian, 10M Gaussians need %.1f GiB (projected from these figures, not run).\n",
-          per, per * 1e7 / 1073741824.0);
+  if (largest >= 10000000)
+    fprintf(f, " The largest run above trained %zu Gaussians: its peak RSS is measured, not projected.\n", largest);
+  else
+    fprintf(f, " At %.0f B a Gaussian, 10M Gaussians need %.1f GiB (projected from these figures, not run).\n",
+            per, per * 1e7 / 1073741824.0);
   fprintf(f, "\nMorse analysis of each scale run's model (α-field, SDF, persistence; 128 voxels along city 1's diagonal, "
              "the same voxel size and band at every N), from scratch and again after the Gaussians of one corner block (1/N² of "
              "the city) changed, with `--morse-incremental` (the α leaves of that block and the SDF band around them rebuilt, "

@@ -20,6 +20,7 @@ typedef struct {
   char config[32];
   int iteration;
   double seconds, ms_per_iter, cpu_ms_per_iter, psnr, ssim;
+  double cpu_seconds; /* this process' CPU time (all threads) spent training so far */
   double phase_ms[MGS_TRAIN_PHASES]; /* per iteration in the segment */
   size_t gaussians;
 } sample;
@@ -55,7 +56,9 @@ static void usage(FILE *f) {
     "  --threads N         worker threads (all cores)\n"
     "  --method NAME=ARGS  train NAME as `morsegs train DATA --iters N --seed 1 ARGS` (any train option,\n"
     "                      e.g. sugar='--preset sugar' or 2dgs='--model 2dgs'); repeatable, up to 8;\n"
-    "                      replaces the default ADC run\n");
+    "                      replaces the default ADC run\n"
+    "  --reach DB,...      time to reach each test PSNR (reach.md; default: per scene the lowest final\n"
+    "                      PSNR of its configurations, so every one reaches it)\n");
 }
 
 static int make_scene(const char *name, const char *dir, int res) {
@@ -73,7 +76,7 @@ static int make_scene(const char *name, const char *dir, int res) {
 static mgs_status sample_run(mgs_trainer *t, const char *scene, const char *config, int iters, const int *evals,
                              int n_evals, samples *out, mgs_error *err) {
   mgs_status st = MGS_OK;
-  double last_s = 0, last_ph[MGS_TRAIN_PHASES] = {0};
+  double last_s = 0, last_ph[MGS_TRAIN_PHASES] = {0}, cpu_total = 0;
   int last_it = 0;
   printf("%-8s %-10s %6s %9s %9s %9s %9s %8s %10s   %s\n", "scene", "config", "iter", "time s", "ms/iter", "cpu ms/it",
          "PSNR", "SSIM", "Gaussians", "ms/iter: fwd loss bwd strategy adam terms");
@@ -91,6 +94,8 @@ static mgs_status sample_run(mgs_trainer *t, const char *scene, const char *conf
     int done = mgs_trainer_iteration(t), seg = done - last_it > 0 ? done - last_it : 1;
     s.ms_per_iter = 1000.0 * (s.seconds - last_s) / (double)seg;
     s.cpu_ms_per_iter = 1000.0 * cpu / (double)seg;
+    cpu_total += cpu;
+    s.cpu_seconds = cpu_total;
     s.gaussians = mgs_trainer_model(t)->n;
     double ph[MGS_TRAIN_PHASES];
     mgs_trainer_phase_seconds(t, ph);
@@ -147,13 +152,13 @@ static mgs_status run_config(const char *scene, const char *config, const char *
  * table and the trainer setup of the train command; nothing is written). */
 static mgs_status run_method(const char *scene, const char *name, const char *args, const char *dir, const char *work,
                              int iters, const int *evals, int n_evals, samples *out, mgs_error *err) {
-  char *words = mgs_strdup(args), its[16], run[PATH_MAX];
+  char *words = mgs_strdup(args), its[16], run[PATH_MAX], *wsave = NULL;
   if (!words) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
   snprintf(its, sizeof its, "%d", iters);
   snprintf(run, sizeof run, "%s/run-%s", work, name);
   char *argv[96] = {"train", (char *)dir, "-o", run, "--iters", its, "--seed", "1"};
   int argc = 8;
-  for (char *w = strtok(words, " \t"); w; w = strtok(NULL, " \t")) {
+  for (char *w = strtok_r(words, " \t", &wsave); w; w = strtok_r(NULL, " \t", &wsave)) {
     if (argc == 95) { free(words); return mgs_error_set(err, MGS_ERR_ARG, "--method %s: too many words", name); }
     argv[argc++] = w;
   }
@@ -186,6 +191,56 @@ static mgs_status run_method(const char *scene, const char *name, const char *ar
   mgs_dataset_destroy(ds);
   free(words);
   return st;
+}
+
+/* Time to quality: for each scene, configuration and target PSNR, the training time at
+ * which the test PSNR first reaches the target, interpolated linearly between the two
+ * evaluations around the crossing (the evaluations are the only PSNRs known). Targets:
+ * the given list, else per scene the lowest final PSNR of its configurations rounded
+ * down to 0.1 dB (a quality every configuration reaches). Writes a Markdown table. */
+static void write_reach(const samples *ss, const double *targets, int n_targets, FILE *f) {
+  fprintf(f, "| scene | config | target PSNR dB | reached at iteration | wall s | CPU s (all threads) |\n"
+             "|---|---|---|---|---|---|\n");
+  for (size_t i = 0; i < ss->n;) {
+    size_t scene_end = i;
+    while (scene_end < ss->n && !strcmp(ss->s[scene_end].scene, ss->s[i].scene)) scene_end++;
+    double tg[16];
+    int nt = n_targets;
+    if (nt > 0) memcpy(tg, targets, sizeof(double) * (size_t)nt);
+    else {
+      double lowest = 1e9;
+      for (size_t j = i; j < scene_end;) {
+        size_t k = j;
+        while (k < scene_end && !strcmp(ss->s[k].config, ss->s[j].config)) k++;
+        if (strcmp(ss->s[j].config, "peer-2000")) lowest = fmin(lowest, ss->s[k - 1].psnr);
+        j = k;
+      }
+      tg[0] = floor(lowest * 10.0) / 10.0;
+      nt = lowest < 1e9 ? 1 : 0;
+    }
+    for (int t = 0; t < nt; t++)
+      for (size_t j = i; j < scene_end;) {
+        size_t k = j;
+        while (k < scene_end && !strcmp(ss->s[k].config, ss->s[j].config)) k++;
+        const sample *a = NULL, *b = NULL;
+        for (size_t q = j; q < k; q++)
+          if (ss->s[q].psnr >= tg[t]) { b = &ss->s[q]; a = q > j ? &ss->s[q - 1] : NULL; break; }
+        if (!strcmp(ss->s[j].config, "peer-2000")) { j = k; continue; }
+        if (!b)
+          fprintf(f, "| %s | %s | %.2f | not reached by %d (%.2f dB) | – | – |\n", ss->s[j].scene, ss->s[j].config, tg[t],
+                  ss->s[k - 1].iteration, ss->s[k - 1].psnr);
+        else {
+          double w = a && b->psnr > a->psnr ? (tg[t] - a->psnr) / (b->psnr - a->psnr) : 1.0;
+          double wall = a ? a->seconds + w * (b->seconds - a->seconds) : b->seconds;
+          double cpu = a ? a->cpu_seconds + w * (b->cpu_seconds - a->cpu_seconds) : b->cpu_seconds;
+          double it = a ? a->iteration + w * (b->iteration - a->iteration) : b->iteration;
+          fprintf(f, "| %s | %s | %.2f | %.0f (between %d and %d) | %.1f | %.1f |\n", ss->s[j].scene, ss->s[j].config, tg[t], it,
+                  a ? a->iteration : 0, b->iteration, wall, cpu);
+        }
+        j = k;
+      }
+    i = scene_end;
+  }
 }
 
 static void plot(const samples *ss, const char *path) {
@@ -256,11 +311,13 @@ int mgs_bench_train(int argc, char **argv) {
                                        {"no-peer", no_argument, 0, 'P'}, {"random", required_argument, 0, 'R'},
                                        {"no-densify", no_argument, 0, 'D'}, {"work", required_argument, 0, 'w'},
                                        {"output", required_argument, 0, 'o'}, {"threads", required_argument, 0, 't'},
-                                       {"method", required_argument, 0, 'm'}, {"help", no_argument, 0, 'h'},
+                                       {"method", required_argument, 0, 'm'}, {"reach", required_argument, 0, 'T'},
+                                       {"help", no_argument, 0, 'h'},
                                        {0, 0, 0, 0}};
   int full = 0, iters = 0, res = 200, peer = 1, threads = 0, random_n = 0, densify = 1, c;
   const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train", *methods[8];
-  int n_methods = 0;
+  int n_methods = 0, n_targets = 0;
+  double targets[16];
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
     switch (c) {
@@ -281,6 +338,20 @@ int mgs_bench_train(int argc, char **argv) {
           return 2;
         }
         methods[n_methods++] = optarg;
+        break;
+      }
+      case 'T': {
+        n_targets = 0;
+        for (const char *p = optarg; *p && n_targets < 16;) {
+          char *end;
+          double v = strtod(p, &end);
+          if (end == p || !(v > 0 && v < 100) || (*end && *end != ',')) {
+            fprintf(stderr, "morsegs bench train: --reach needs PSNR targets in dB, e.g. 30,33: '%s'\n", optarg);
+            return 2;
+          }
+          targets[n_targets++] = v;
+          p = *end ? end + 1 : end;
+        }
         break;
       }
       case 'h': usage(stdout); return 0;
@@ -305,8 +376,9 @@ int mgs_bench_train(int argc, char **argv) {
   samples ss = {0};
   char *list = mgs_strdup(scenes);
   printf("morsegs bench train: %d iterations at %dx%d, %d threads\n", iters, res, res, mgs_parallel_max_threads());
+  char *lsave = NULL;
   mgs_status st = MGS_OK;
-  for (char *tok = strtok(list, ","); tok && st == MGS_OK; tok = strtok(NULL, ",")) {
+  for (char *tok = strtok_r(list, ",", &lsave); tok && st == MGS_OK; tok = strtok_r(NULL, ",", &lsave)) {
     char dir[PATH_MAX];
     snprintf(dir, sizeof dir, "%s/%s_%d", work, tok, res);
     if (make_scene(tok, dir, res) != 0) { st = mgs_error_set(&err, MGS_ERR_ARG, "cannot make the built-in scene '%s'", tok); break; }
@@ -335,11 +407,11 @@ int mgs_bench_train(int argc, char **argv) {
   snprintf(path, sizeof path, "%s/train.csv", out);
   FILE *f = fopen(path, "w");
   if (f) {
-    fprintf(f, "scene,config,iteration,train_seconds,ms_per_iter,cpu_ms_per_iter,gaussians,test_psnr,test_ssim,fwd_ms,loss_ms,bwd_ms,strategy_ms,adam_ms,terms_ms\n");
+    fprintf(f, "scene,config,iteration,train_seconds,ms_per_iter,cpu_ms_per_iter,gaussians,test_psnr,test_ssim,fwd_ms,loss_ms,bwd_ms,strategy_ms,adam_ms,terms_ms,cpu_seconds\n");
     for (size_t i = 0; i < ss.n; i++)
-      fprintf(f, "%s,%s,%d,%.3f,%.3f,%.3f,%zu,%.4f,%.5f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", ss.s[i].scene, ss.s[i].config, ss.s[i].iteration,
+      fprintf(f, "%s,%s,%d,%.3f,%.3f,%.3f,%zu,%.4f,%.5f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", ss.s[i].scene, ss.s[i].config, ss.s[i].iteration,
               ss.s[i].seconds, ss.s[i].ms_per_iter, ss.s[i].cpu_ms_per_iter, ss.s[i].gaussians, ss.s[i].psnr, ss.s[i].ssim, ss.s[i].phase_ms[0],
-              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].phase_ms[5]);
+              ss.s[i].phase_ms[1], ss.s[i].phase_ms[2], ss.s[i].phase_ms[3], ss.s[i].phase_ms[4], ss.s[i].phase_ms[5], ss.s[i].cpu_seconds);
     fclose(f);
   }
   snprintf(path, sizeof path, "%s/train.md", out);
@@ -354,9 +426,15 @@ int mgs_bench_train(int argc, char **argv) {
               ss.s[i].psnr, ss.s[i].ssim);
     fclose(f);
   }
+  snprintf(path, sizeof path, "%s/reach.md", out);
+  f = fopen(path, "w");
+  if (f) {
+    write_reach(&ss, targets, n_targets, f);
+    fclose(f);
+  }
   snprintf(path, sizeof path, "%s/train.png", out);
   plot(&ss, path);
-  printf("wrote %s/train.csv, %s/train.md, %s/train.png\n", out, out, out);
+  printf("wrote %s/train.csv, %s/train.md, %s/reach.md (time to reach a test PSNR), %s/train.png\n", out, out, out, out);
   free(ss.s);
   return 0;
 }

@@ -3,12 +3,13 @@
  * topology measures of measure/mgs_measure.h, then the H1–H4 verdicts (stats/mgs_stats.h), curves and
  * tables of apps/cmd_experiment_report.c (SPEC §7, issue 10).
  *
- * Each train and eval is a child process of this same binary (/proc/self/exe), one at a
- * time: a run that crashes, aborts on a numerical error or leaks cannot take the harness
+ * Each run is a worker process (--jobs of them at a time, default 1) whose train and eval
+ * are child processes of this same binary (/proc/self/exe): a run that crashes, aborts on a numerical error or leaks cannot take the harness
  * or the next run with it; its output goes to RUN/train.log and RUN/eval.log; Ctrl-C
  * reaches it as it would reach `morsegs train`; and the child is killed with the harness
- * (PR_SET_PDEATHSIG), so a killed experiment never leaves a run training behind while the
- * next invocation starts. DIR/.lock (flock) refuses a second experiment on the same DIR.
+ * (PR_SET_PDEATHSIG, worker and child alike), so a killed experiment never leaves a run
+ * training behind while the next invocation starts. The worker's verdict comes back as its
+ * exit code, its reason through a pipe, its record through RUN/result.json. DIR/.lock (flock) refuses a second experiment on the same DIR.
  *
  * Resume: a run is finished when RUN/result.json exists (written atomically, last);
  * running again on the same DIR keeps finished runs and redoes unfinished ones from the
@@ -103,6 +104,9 @@ static void usage(FILE *f) {
     "      --topo-res N       topology measures: SDF voxel = GT bounding-box diagonal / N (256)\n"
     "      --report-from FROM re-analysis, no training: FROM's curves.csv and RESULTS.json -> the report in\n"
     "                         -o DIR (verdicts compared with FROM's; no DATA; --variants keeps some)\n"
+    "      --jobs N           runs at a time, each in its own worker process (1); give each one core:\n"
+    "                         MGS_THREADS=1 --jobs 2 on a 2-core machine\n"
+    "      --plan             print the runs, how many are finished and the estimated time; train nothing\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
 }
@@ -259,7 +263,7 @@ typedef struct experiment {
   char *command_line;
   double load_start;
   size_t planned;
-  int failures;
+  int failures, jobs;
 } experiment;
 
 static exp_run *push_run(experiment *e) {
@@ -307,6 +311,7 @@ static mgs_status write_report(experiment *e, mgs_error *err) {
 /* Trains and evaluates one run; returns 0 done, 1 failed (recorded), 2 variant not
  * available, 3 interrupted. */
 static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason, size_t reason_n) {
+  const double run_t0 = mgs_now();
   const variant_sel *vs = &e->vars[it->var];
   const dataset_in *ds = &e->ds[it->ds];
   mgs_error err;
@@ -371,7 +376,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     }
     free(text);
     free(sp);
-    if (!isfinite(out->train_seconds)) { snprintf(reason, reason_n, "%s: no train_seconds in train_stats.json", it->dir); result = 1; goto done; }
+    if (!isfinite(out->train_seconds)) { snprintf(reason, reason_n, "%.900s: no train_seconds in train_stats.json", it->dir); result = 1; goto done; }
   }
   char fin_ply[PATH_MAX + 64];
   snprintf(fin_ply, sizeof fin_ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, e->iters);
@@ -430,7 +435,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     p->measure_seconds = mgs_now() - m0;
     out->n_points++;
   }
-  if (out->n_points == 0) { snprintf(reason, reason_n, "%s: no saved model to evaluate", it->dir); result = 1; goto done; }
+  if (out->n_points == 0) { snprintf(reason, reason_n, "%.900s: no saved model to evaluate", it->dir); result = 1; goto done; }
+  out->run_seconds = mgs_now() - run_t0;
   {
     char *rp = mgs_path_join(it->dir, "result.json");
     if (exp_run_write(rp, out, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; }
@@ -440,6 +446,120 @@ done:
   free(tlog);
   free(elog);
   return result;
+}
+
+
+/* ---------------------------------------------------------------- workers (--jobs) */
+typedef struct job {
+  pid_t pid;
+  int fd;           /* read end of the worker's reason pipe */
+  size_t item, idx;
+  double t0;
+  char label[512];
+} job;
+
+/* Forks a worker that runs plan item `it` (do_run) and exits with its result code. */
+static pid_t start_job(experiment *e, const plan_item *it, int *fd_out) {
+  int p[2];
+  if (pipe2(p, O_CLOEXEC)) return -1;
+  pid_t parent = getpid();
+  fflush(stdout);
+  fflush(stderr);
+  pid_t pid = fork();
+  if (pid < 0) { close(p[0]); close(p[1]); return -1; }
+  if (pid == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(3);
+    close(p[0]);
+    exp_run r;
+    char reason[1024];
+    int res = do_run(e, it, &r, reason, sizeof reason);
+    size_t n = strlen(reason);
+    if (n && write(p[1], reason, n) < 0) res = res ? res : 1;
+    _exit(res);
+  }
+  close(p[1]);
+  *fd_out = p[0];
+  return pid;
+}
+
+/* The worker's result: 0 done, 1 failed, 2 not available, 3 interrupted (as do_run). */
+static int finish_job(job *j, int status, char *reason, size_t reason_n) {
+  size_t got = 0;
+  ssize_t r;
+  while (got + 1 < reason_n && ((r = read(j->fd, reason + got, reason_n - 1 - got)) > 0 || (r < 0 && errno == EINTR)))
+    if (r > 0) got += (size_t)r;
+  reason[got] = 0;
+  close(j->fd);
+  if (WIFEXITED(status) && WEXITSTATUS(status) <= 3) return WEXITSTATUS(status);
+  if (g_stop) return 3;
+  if (!reason[0]) snprintf(reason, reason_n, "the run's worker process ended with status %d", status);
+  return 1;
+}
+
+/* ---------------------------------------------------------------- --plan */
+static double dataset_pixels(const dataset_in *d) {
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  o.load_images = 0;
+  mgs_dataset *ds = NULL;
+  mgs_error err;
+  double px = 800.0 * 800.0;
+  if (mgs_dataset_load(d->path, &o, &ds, &err) == MGS_OK && ds->n_views[MGS_SPLIT_TRAIN] > 0) {
+    const mgs_camera *c = &ds->views[MGS_SPLIT_TRAIN][0].cam;
+    px = (double)c->width * (double)c->height;
+  }
+  mgs_dataset_destroy(ds);
+  return px;
+}
+
+/* Prints the plan and its estimated time; nothing is trained or written. */
+static void print_plan(const experiment *e, const plan_item *plan, size_t np, const unsigned char *done) {
+  double base_mean = NAN;
+  {
+    double sum = 0;
+    int n = 0;
+    for (size_t i = 0; i < e->n_runs; i++)
+      if (!strcmp(e->runs[i].variant, "baseline") && isfinite(e->runs[i].run_seconds)) { sum += e->runs[i].run_seconds; n++; }
+    if (n) base_mean = sum / n;
+  }
+  double *px = calloc(e->n_ds ? e->n_ds : 1, sizeof *px);
+  for (size_t d = 0; d < e->n_ds; d++) px[d] = dataset_pixels(&e->ds[d]);
+  printf("plan for %s: %zu runs, %d iterations each, %d evaluation points\n", e->dir, np, e->iters, e->n_evals);
+  printf("| variant | runs | finished | to run | estimated s per run (one core) | from |\n|---|---|---|---|---|---|\n");
+  double total = 0;
+  size_t todo_all = 0;
+  for (size_t v = 0; v < e->n_vars; v++) {
+    const variant_sel *vs = &e->vars[v];
+    size_t runs = 0, fin = 0, todo = 0;
+    double sum = 0, est_sum = 0;
+    int n = 0;
+    for (size_t i = 0; i < e->n_runs; i++)
+      if (!strcmp(e->runs[i].variant, vs->def->name) && isfinite(e->runs[i].run_seconds)) { sum += e->runs[i].run_seconds; n++; }
+    const char *from;
+    for (size_t i = 0; i < np; i++) {
+      if (plan[i].var != v) continue;
+      runs++;
+      if (done[i]) { fin++; continue; }
+      todo++;
+      double est;
+      int evals = plan[i].sweep ? 1 : e->n_evals;
+      if (n) est = sum / n;
+      else if (isfinite(base_mean)) est = base_mean * exp_variant_cost_factor(vs->def->args);
+      else est = exp_run_cost_prior(vs->def->args, e->iters, px[plan[i].ds], evals);
+      est_sum += est;
+    }
+    from = n ? "its finished runs" : isfinite(base_mean) ? "baseline's finished runs × factor" : "prior (bench figures)";
+    total += est_sum;
+    todo_all += todo;
+    printf("| %s | %zu | %zu | %zu | %.0f | %s |\n", vs->def->name, runs, fin, todo, todo ? est_sum / (double)todo : 0.0, from);
+  }
+  char a[32], b[32];
+  fmt_duration(total, a, sizeof a);
+  fmt_duration(total / (e->jobs > 0 ? e->jobs : 1), b, sizeof b);
+  printf("to run: %zu runs, about %s on one core; with --jobs %d (MGS_THREADS=1 each, one core per job) about %s of wall "
+         "time on an otherwise idle machine\n", todo_all, a, e->jobs, b);
+  free(px);
 }
 
 /* ---------------------------------------------------------------- the command */
@@ -493,7 +613,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -503,11 +623,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
-    {"base", required_argument, 0, O_BASE}, {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
+    {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN},
+    {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
   e.iters = 30000; e.seeds = 3; e.sweep_seeds = 0; e.topo_res = EXP_TOPO_RES; /* sweep_seeds 0: as --seeds */
-  int n_evals = 4, rc = 1, lock_fd = -1;
+  int n_evals = 4, rc = 1, lock_fd = -1, plan_only = 0;
+  e.jobs = 1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
   strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0};
   variant_def custom_defs[16];
@@ -532,6 +654,8 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_KNOB: sl_push(&knobs, optarg); break;
       case O_TRAIN_ARG: sl_push(&e.train_args, optarg); break;
       case O_REPORT_FROM: report_from = optarg; break;
+      case O_JOBS: if (!parse_int(optarg, "--jobs", 1, &e.jobs) || e.jobs > 64) { fprintf(stderr, "morsegs experiment: --jobs must be 1..64\n"); return 2; } break;
+      case O_PLAN: plan_only = 1; break;
       case O_EVAL_VIEWS: if (!parse_int(optarg, "--eval-views", 1, &e.eval_views)) return 2; break;
       case O_TOPO_RES: if (!parse_int(optarg, "--topo-res", 16, &e.topo_res) || e.topo_res > 4096) { fprintf(stderr, "morsegs experiment: --topo-res must be 16..4096\n"); return 2; } break;
       case 'h': case O_HELP: usage(stdout); return 0;
@@ -692,8 +816,9 @@ int mgs_cmd_experiment(int argc, char **argv) {
     for (size_t k = 0; k < i; k++)
       if (!strcmp(e.ds[k].name, d->name)) { size_t l = strlen(d->name); snprintf(d->name + (l > 100 ? 100 : l), 20, "_%d", (int)(i % 10000) + 1); }
   }
-  /* the folder, its lock and its settings */
+  /* the folder, its lock and its settings (--plan writes nothing and takes no lock) */
   if (mgs_path_exists(e.dir) && !mgs_is_dir(e.dir)) { fprintf(stderr, "morsegs experiment: %s: exists and is not a folder\n", e.dir); goto fail; }
+  if (!plan_only) {
   if (mgs_mkdir_p(e.dir, &err)) { mgs_cli_fail("experiment", &err); goto fail; }
   {
     char *lp = mgs_path_join(e.dir, ".lock");
@@ -710,8 +835,9 @@ int mgs_cmd_experiment(int argc, char **argv) {
   if (nl <= 0) { fprintf(stderr, "morsegs experiment: cannot find its own executable (/proc/self/exe)\n"); goto fail; }
   g_exe[nl] = 0;
   e.load_start = load_avg();
+  } /* !plan_only */
   /* ground truth per dataset */
-  for (size_t i = 0; i < e.n_ds; i++) {
+  for (size_t i = 0; i < e.n_ds && !plan_only; i++) {
     dataset_in *d = &e.ds[i];
     char sub[EXP_NAME + 16];
     snprintf(sub, sizeof sub, "datasets/%s", d->name);
@@ -771,6 +897,11 @@ int mgs_cmd_experiment(int argc, char **argv) {
     }
     free(rp);
   }
+  if (plan_only) {
+    print_plan(&e, plan, np, done);
+    rc = 0;
+    goto fail_plan;
+  }
   printf("experiment %s: %zu runs planned (%zu datasets x %zu variants x %d seeds + %zu sweep runs), %zu finished before, "
          "%d iterations each, evaluated at", e.dir, np, e.n_ds, e.n_vars, e.seeds, np - e.n_ds * e.n_vars * (size_t)e.seeds,
          kept, e.iters);
@@ -778,37 +909,70 @@ int mgs_cmd_experiment(int argc, char **argv) {
   printf("\n");
   if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
   double spent = 0;
-  size_t ran = 0, idx = 0, todo = np - kept;
-  int interrupted = 0;
-  for (size_t i = 0; i < np && !interrupted; i++) {
-    if (done[i]) continue;
-    plan_item *it = &plan[i];
-    variant_sel *vs = &e.vars[it->var];
-    idx++;
-    char label[512];
-    if (it->sweep) snprintf(label, sizeof label, "%s / %s / %s x%g (seed %d)", e.ds[it->ds].name, vs->def->name, vs->knob, it->factor, it->seed);
-    else snprintf(label, sizeof label, "%s / %s / seed %d", e.ds[it->ds].name, vs->def->name, it->seed);
-    if (!strcmp(vs->status.status, "not available") || (it->sweep && vs->sweep_unavailable)) {
-      printf("[%zu/%zu] %s: skipped (not available)\n", idx, todo, label);
+  size_t ran = 0, idx = 0, todo = np - kept, next = 0;
+  int interrupted = 0, n_running = 0, forwarded = 0;
+  job *running = calloc((size_t)e.jobs, sizeof *running);
+  if (!running) { fprintf(stderr, "morsegs experiment: out of memory\n"); goto fail_plan; }
+  for (;;) {
+    /* start runs while there are free jobs */
+    while (!g_stop && !interrupted && n_running < e.jobs) {
+      while (next < np && done[next]) next++;
+      if (next >= np) break;
+      const size_t i = next++;
+      plan_item *it = &plan[i];
+      variant_sel *vs = &e.vars[it->var];
+      idx++;
+      char label[512];
+      if (it->sweep) snprintf(label, sizeof label, "%s / %s / %s x%g (seed %d)", e.ds[it->ds].name, vs->def->name, vs->knob, it->factor, it->seed);
+      else snprintf(label, sizeof label, "%s / %s / seed %d", e.ds[it->ds].name, vs->def->name, it->seed);
+      if (!strcmp(vs->status.status, "not available") || (it->sweep && vs->sweep_unavailable)) {
+        printf("[%zu/%zu] %s: skipped (not available)\n", idx, todo, label);
+        continue;
+      }
+      char eta[32];
+      fmt_duration(ran ? spent / (double)ran * (double)(todo - idx + 1) / (double)e.jobs : NAN, eta, sizeof eta);
+      printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
+             todo - idx + 1, eta);
+      fflush(stdout);
+      job *j = &running[n_running];
+      j->pid = start_job(&e, it, &j->fd);
+      if (j->pid < 0) { fprintf(stderr, "morsegs experiment: cannot start a worker process: %s\n", strerror(errno)); interrupted = 1; break; }
+      j->item = i; j->idx = idx; j->t0 = mgs_now();
+      snprintf(j->label, sizeof j->label, "%s", label);
+      n_running++;
+    }
+    if (n_running == 0) break;
+    /* wait for one of them */
+    int status = 0;
+    pid_t pid = waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno != EINTR) break;
+      if (g_stop && !forwarded) { for (int k = 0; k < n_running; k++) kill(running[k].pid, SIGINT); forwarded = 1; }
       continue;
     }
-    char eta[32];
-    fmt_duration(ran ? spent / (double)ran * (double)(todo - idx + 1) : NAN, eta, sizeof eta);
-    printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
-           todo - idx + 1, eta);
-    fflush(stdout);
-    const double t0 = mgs_now();
-    exp_run *r = push_run(&e);
-    if (!r) { fprintf(stderr, "morsegs experiment: out of memory\n"); goto fail_plan; }
+    int k = 0;
+    while (k < n_running && running[k].pid != pid) k++;
+    if (k == n_running) continue;
+    job jb = running[k];
+    running[k] = running[--n_running];
+    plan_item *it = &plan[jb.item];
+    variant_sel *vs = &e.vars[it->var];
     char reason[1024];
-    int res = do_run(&e, it, r, reason, sizeof reason);
-    const double dt = mgs_now() - t0;
-    if (res != 0) e.n_runs--;
+    int res = finish_job(&jb, status, reason, sizeof reason);
+    const double dt = mgs_now() - jb.t0;
+    exp_run *r = NULL;
+    if (res == 0) {
+      char *rp = mgs_path_join(it->dir, "result.json");
+      r = push_run(&e);
+      if (!r) { fprintf(stderr, "morsegs experiment: out of memory\n"); free(rp); free(running); goto fail_plan; }
+      if (exp_run_read(rp, r, &err)) { snprintf(reason, sizeof reason, "%s", err.msg); e.n_runs--; res = 1; }
+      free(rp);
+    }
     if (res == 0) {
       spent += dt; ran++;
       snprintf(vs->status.status, sizeof vs->status.status, "available");
       const exp_point *p = &r->pt[r->n_points - 1];
-      printf("[%zu/%zu] %s: done in %.1f s (train %.1f s): PSNR %.3f dB, %.0f Gaussians, Chamfer %.6g\n", idx, todo, label,
+      printf("[%zu/%zu] %s: done in %.1f s (train %.1f s): PSNR %.3f dB, %.0f Gaussians, Chamfer %.6g\n", jb.idx, todo, jb.label,
              dt, r->train_seconds, p->psnr, p->gaussians, p->chamfer);
     } else if (res == 2) {
       mgs_error e2;
@@ -819,11 +983,11 @@ int mgs_cmd_experiment(int argc, char **argv) {
       if (it->sweep && it->factor != 1.0 && strcmp(vs->status.status, "not available")) {
         vs->sweep_unavailable = 1;
         snprintf(vs->sweep_reason, sizeof vs->sweep_reason, "%s", reason);
-        printf("[%zu/%zu] %s: the knob %s is not available: %s\n", idx, todo, label, vs->knob, reason);
+        printf("[%zu/%zu] %s: the knob %s is not available: %s\n", jb.idx, todo, jb.label, vs->knob, reason);
       } else {
         snprintf(vs->status.status, sizeof vs->status.status, "not available");
         snprintf(vs->status.reason, sizeof vs->status.reason, "%s", reason);
-        printf("[%zu/%zu] %s: variant not available: %s\n", idx, todo, label, reason);
+        printf("[%zu/%zu] %s: variant not available: %s\n", jb.idx, todo, jb.label, reason);
       }
     } else if (res == 3) {
       interrupted = 1;
@@ -833,11 +997,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
         snprintf(vs->status.status, sizeof vs->status.status, "failed");
         snprintf(vs->status.reason, sizeof vs->status.reason, "%s", reason);
       }
-      printf("[%zu/%zu] %s: FAILED: %s\n", idx, todo, label, reason);
+      printf("[%zu/%zu] %s: FAILED: %s\n", jb.idx, todo, jb.label, reason);
     }
     fflush(stdout);
-    if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
+    if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); free(running); goto fail_plan; }
   }
+  free(running);
+  if (g_stop) interrupted = 1;
   sigaction(SIGINT, &old_int, NULL);
   sigaction(SIGTERM, &old_term, NULL);
   if (interrupted) {

@@ -3,7 +3,8 @@
  *   cmd_experiment.c ........ command line, plan, one child process per train/eval, resume
  *   cmd_experiment_report.c . RESULTS.md / RESULTS.json / CSV, H1–H4 verdicts, and
  *                             re-analysis of earlier results (--report-from)
- *   cmd_experiment_plot.c ... line plots (cairo, PNG + SVG). */
+ *   cmd_experiment_plot.c ... line plots (cairo, PNG + SVG)
+ *   cmd_experiment_plan.c ... what a run costs before it has run (--plan). */
 #ifndef MGS_EXPERIMENT_H
 #define MGS_EXPERIMENT_H
 #include <stddef.h>
@@ -52,5 +53,13 @@ typedef struct exp_series {
 /* Writes base.png and base.svg (atomically). logy: logarithmic y axis. */
 mgs_status exp_plot_lines(const char *base, const char *title, const char *xlabel, const char *ylabel,
                           const exp_series *s, size_t ns, int logy, mgs_error *err);
+
+/* ---- the plan's cost ---- */
+/* CPU time per iteration of a variant (its `morsegs train` arguments, NULL-terminated)
+ * against 3DGS's, as measured by `morsegs bench train --method`. */
+double exp_variant_cost_factor(const char *const *args);
+/* Seconds one run of the variant takes on one core: training `iters` iterations on views
+ * of `pixels` pixels, and n_evals evaluation points; a prior for plans with no finished run. */
+double exp_run_cost_prior(const char *const *args, int iters, double pixels, int n_evals);
 
 #endif

@@ -41,6 +41,7 @@ typedef struct exp_run {
   double factor;               /* densification knob multiplier (1 = the variant's default) */
   int iters;
   double train_seconds, analysis_seconds; /* analysis: NAN when the run does not report one */
+  double run_seconds;          /* wall time of training, evaluations and measures (NAN in older records) */
   int n_points;
   exp_point pt[EXP_MAX_POINTS];
 } exp_run;

@@ -15,7 +15,8 @@
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS, VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
 # SWEEP ("0.25,0.5,2,4"; "none"), MORSEGS (a frozen binary for a run spread over days),
-# MGS_THREADS (1), NICE (10).
+# MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
+# runs and the estimated time, train nothing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=${1:-exp-baselines}
@@ -49,4 +50,4 @@ MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
   --variants baseline,morse-r,morse-full,2dgs,2dgs-morse-r,mini-splatting,ms-morse-r,sugar,gaussianpro \
   --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
-  --sweep-variants baseline,mini-splatting
+  --sweep-variants baseline,mini-splatting --jobs "${JOBS:-2}" ${PLAN:+--plan}

@@ -3,7 +3,9 @@
  * its first finished run and started again, it keeps that run untouched, leaves no training
  * process behind, and finishes with RESULTS.md, RESULTS.json, the CSVs, the plots and one
  * folder per run; the figures RESULTS.md shows for a run equal what `morsegs eval` reports
- * for it. */
+ * for it. The second invocation runs two runs at a time (--jobs 2). --plan lists the runs
+ * and an estimate without creating the folder, and after the kill counts the finished run
+ * and estimates from it. */
 #include <dirent.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -79,6 +81,22 @@ int main(void) {
                         (char *)"--seeds", (char *)"2", (char *)"--evals", (char *)"2", (char *)"--sweep", (char *)"2", (char *)"--sweep-seeds", (char *)"1",
                         (char *)"--topo-res", (char *)"96", (char *)"--variants", (char *)"baseline,bogus",
                         (char *)"--variant", (char *)"bogus=--no-such-flag 1", NULL};
+  /* --plan: the runs and an estimate, nothing written */
+  char plan_log[600], cmd[4096] = "";
+  snprintf(plan_log, sizeof plan_log, "%s/plan.log", tmp);
+  for (int i = 1; args[i]; i++) {
+    size_t l = strlen(cmd);
+    snprintf(cmd + l, sizeof cmd - l, " '%s'", args[i]);
+  }
+  CHECK(mgs_test_sh("'%s'%s --plan > '%s'", cli, cmd, plan_log) == 0);
+  char *plan = NULL;
+  size_t pn;
+  mgs_read_file(plan_log, &plan, &pn, NULL);
+  CHECK_MSG(plan && strstr(plan, "5 runs") && strstr(plan, "| baseline | 3 | 0 | 3 |") && strstr(plan, "prior"),
+            "plan: %s", plan ? plan : "(none)");
+  CHECK_MSG(!mgs_path_exists(out), "--plan created %s", out);
+  free(plan);
+  plan = NULL;
   /* first invocation, killed once its first run is finished */
   pid_t pid = fork();
   if (pid == 0) {
@@ -108,13 +126,12 @@ int main(void) {
   size_t n;
   mgs_read_file(first, &before, &n, NULL);
   const double t_result = mtime(first), t_ply = mtime(first_ply);
-  /* second invocation: finishes without redoing the finished run */
-  char cmd[4096] = "";
-  for (int i = 1; args[i]; i++) {
-    size_t l = strlen(cmd);
-    snprintf(cmd + l, sizeof cmd - l, " '%s'", args[i]);
-  }
-  CHECK(mgs_test_sh("'%s'%s > '%s'", cli, cmd, log2) == 0);
+  CHECK(mgs_test_sh("'%s'%s --plan > '%s'", cli, cmd, plan_log) == 0);
+  mgs_read_file(plan_log, &plan, &pn, NULL);
+  CHECK_MSG(plan && strstr(plan, "| baseline | 3 | 1 | 2 |") && strstr(plan, "its finished runs"), "plan: %s", plan ? plan : "(none)");
+  free(plan);
+  /* second invocation, two runs at a time: finishes without redoing the finished run */
+  CHECK(mgs_test_sh("'%s'%s --jobs 2 > '%s'", cli, cmd, log2) == 0);
   char *after = NULL, *l2 = NULL;
   mgs_read_file(first, &after, &n, NULL);
   CHECK(before && after && !strcmp(before, after));

@@ -106,6 +106,8 @@ static void usage(FILE *f) {
     "                         -o DIR (verdicts compared with FROM's; no DATA; --variants keeps some)\n"
     "      --jobs N           runs at a time, each in its own worker process (1); give each one core:\n"
     "                         MGS_THREADS=1 --jobs 2 on a 2-core machine\n"
+    "      --variant-seeds V=N  main runs of variant V with seeds 0..N-1 only (N <= --seeds; e.g. 3 for the\n"
+    "                         baselines no MorseGS variant is measured against)\n"
     "      --plan             print the runs, how many are finished and the estimated time; train nothing\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
@@ -244,6 +246,7 @@ typedef struct variant_sel {
   exp_variant_status status;
   int sweep_unavailable;
   char sweep_reason[1024];
+  int seeds;                  /* main runs of this variant: seeds 0..seeds-1 (--variant-seeds; else --seeds) */
 } variant_sel;
 
 typedef struct experiment {
@@ -613,7 +616,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -624,6 +627,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
     {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN},
+    {"variant-seeds", required_argument, 0, O_VARIANT_SEEDS},
     {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
@@ -631,7 +635,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
   int n_evals = 4, rc = 1, lock_fd = -1, plan_only = 0;
   e.jobs = 1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
-  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0};
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0};
   variant_def custom_defs[16];
   char custom_buf[16][512];
   size_t n_custom = 0;
@@ -643,6 +647,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_VARIANTS: variants = optarg; break;
       case O_VARIANT: sl_push(&custom, optarg); break;
       case O_BASE: sl_push(&bases, optarg); break;
+      case O_VARIANT_SEEDS: sl_push(&vseeds, optarg); break;
       case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
@@ -775,6 +780,20 @@ int mgs_cmd_experiment(int argc, char **argv) {
     if (!strcmp(bases.v[i], eq + 1) || !strcmp(bases.v[i], "baseline")) { fprintf(stderr, "morsegs experiment: --base %s=%s: a variant cannot be its own base, nor can baseline have one\n", bases.v[i], eq + 1); goto usage_fail; }
     snprintf(v->status.base, sizeof v->status.base, "%s", eq + 1);
   }
+  for (size_t k = 0; k < e.n_vars; k++) e.vars[k].seeds = e.seeds;
+  for (size_t i = 0; i < vseeds.n; i++) {
+    char *eq = strchr(vseeds.v[i], '=');
+    int n = 0;
+    if (!eq || eq == vseeds.v[i] || !parse_int(eq + 1, "--variant-seeds", 1, &n) || n > e.seeds) {
+      fprintf(stderr, "morsegs experiment: --variant-seeds needs VARIANT=N with 1 <= N <= --seeds (got '%s')\n", vseeds.v[i]);
+      goto usage_fail;
+    }
+    *eq = 0;
+    int found = 0;
+    for (size_t k = 0; k < e.n_vars; k++)
+      if (!strcmp(e.vars[k].def->name, vseeds.v[i])) { e.vars[k].seeds = n; found = 1; }
+    if (!found) { fprintf(stderr, "morsegs experiment: --variant-seeds: '%s' is not among --variants\n", vseeds.v[i]); goto usage_fail; }
+  }
   for (size_t i = 0; i < knobs.n; i++) {
     char *eq = strchr(knobs.v[i], '='), *colon = eq ? strrchr(eq, ':') : NULL;
     double val = colon ? strtod(colon + 1, NULL) : 0;
@@ -855,17 +874,20 @@ int mgs_cmd_experiment(int argc, char **argv) {
     else
       printf("%s: no GT mesh: geometry and topology measures are skipped\n", d->name);
   }
-  /* the plan: main runs seed by seed (so early results cover every variant), then sweeps */
+  /* the plan: main runs seed by seed over every dataset (so results that stop early cover
+     every dataset and variant with the first seeds), then the sweeps */
   size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)e.n_sweep * (size_t)e.sweep_seeds) + 1;
   plan_item *plan = calloc(cap, sizeof *plan);
   size_t np = 0;
-  for (size_t d = 0; d < e.n_ds; d++) {
-    for (int s = 0; s < e.seeds; s++)
+  for (int s = 0; s < e.seeds; s++)
+    for (size_t d = 0; d < e.n_ds; d++)
       for (size_t v = 0; v < e.n_vars; v++) {
+        if (s >= e.vars[v].seeds) continue;
         plan_item *p = &plan[np++];
         p->ds = d; p->var = v; p->seed = s; p->factor = 1.0;
         snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, s);
       }
+  for (size_t d = 0; d < e.n_ds; d++) {
     for (size_t v = 0; v < e.n_vars; v++) {
       if (!e.vars[v].sweep) continue;
       for (int k = 0; k < e.n_sweep; k++)
@@ -902,9 +924,10 @@ int mgs_cmd_experiment(int argc, char **argv) {
     rc = 0;
     goto fail_plan;
   }
-  printf("experiment %s: %zu runs planned (%zu datasets x %zu variants x %d seeds + %zu sweep runs), %zu finished before, "
-         "%d iterations each, evaluated at", e.dir, np, e.n_ds, e.n_vars, e.seeds, np - e.n_ds * e.n_vars * (size_t)e.seeds,
-         kept, e.iters);
+  size_t n_sweep_runs = 0;
+  for (size_t i = 0; i < np; i++) n_sweep_runs += plan[i].sweep != 0;
+  printf("experiment %s: %zu runs planned (%zu datasets x %zu variants x up to %d seeds + %zu sweep runs), %zu finished before, "
+         "%d iterations each, evaluated at", e.dir, np, e.n_ds, e.n_vars, e.seeds, n_sweep_runs, kept, e.iters);
   for (int k = 0; k < e.n_evals; k++) printf(" %d", e.evals[k]);
   printf("\n");
   if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
@@ -1024,7 +1047,7 @@ fail:
   free(e.runs);
   free(e.command_line);
   sl_free(&e.train_args);
-  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases); sl_free(&vseeds);
   if (lock_fd >= 0) close(lock_fd);
   mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;

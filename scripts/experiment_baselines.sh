@@ -7,11 +7,14 @@
 #   2dgs, 2dgs-morse-r (measured against 2dgs)         MorseGS' loss on 2DGS
 #   mini-splatting, ms-morse-r (against mini-splatting) MorseGS' loss on Mini-Splatting
 #   sugar, gaussianpro                                 the other two baselines
+# SuGaR and GaussianPro (no MorseGS variant sits on them) with SEEDS_OTHER (3) seeds.
 # H3's Pareto fronts: baseline and mini-splatting swept (--grad-threshold ×{0.25,0.5,2,4}).
 # Resumable (finished runs are kept). Cost (2026-11-25, 2-core machine): a 7500-iteration
 # 200² 3DGS run is ~5 CPU-minutes plus ~3 for its evaluations, 2DGS ~3× the training, so the
-# default plan (5 scenes × 9 variants × 5 seeds + 2 × 4 × 5 × 5 sweep runs = 425 runs) is
-# about two and a half CPU-days: run it where there are cores, or across nights.
+# default plan (5 scenes × (7 variants × 5 seeds + 2 × 3 seeds) + 2 × 4 × 5 × 5 sweep runs =
+# 405 runs) is about two CPU-days (PLAN=1 prints the estimate): run it where there are
+# cores, or across nights; runs go seed by seed over every scene, so a run stopped early
+# has every scene and variant with its first seeds.
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS, VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
 # SWEEP ("0.25,0.5,2,4"; "none"), MORSEGS (a frozen binary for a run spread over days),
@@ -50,4 +53,5 @@ MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
   --variants baseline,morse-r,morse-full,2dgs,2dgs-morse-r,mini-splatting,ms-morse-r,sugar,gaussianpro \
   --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
+  --variant-seeds sugar="${SEEDS_OTHER:-3}" --variant-seeds gaussianpro="${SEEDS_OTHER:-3}" \
   --sweep-variants baseline,mini-splatting --jobs "${JOBS:-2}" ${PLAN:+--plan}

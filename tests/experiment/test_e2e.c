@@ -97,6 +97,13 @@ int main(void) {
   CHECK_MSG(!mgs_path_exists(out), "--plan created %s", out);
   free(plan);
   plan = NULL;
+  /* --variant-seeds: fewer seeds for one variant */
+  CHECK(mgs_test_sh("'%s'%s --variant-seeds bogus=1 --plan > '%s'", cli, cmd, plan_log) == 0);
+  mgs_read_file(plan_log, &plan, &pn, NULL);
+  CHECK_MSG(plan && strstr(plan, "4 runs") && strstr(plan, "| bogus | 1 | 0 | 1 |"), "plan: %s", plan ? plan : "(none)");
+  free(plan);
+  plan = NULL;
+  CHECK(mgs_test_sh("'%s'%s --variant-seeds bogus=3 --plan > /dev/null 2>&1", cli, cmd) == 2); /* more than --seeds */
   /* first invocation, killed once its first run is finished */
   pid_t pid = fork();
   if (pid == 0) {

@@ -218,6 +218,54 @@ static int run_case(int size, size_t n, double min_time, bench_result *res) {
  * steps (--unfused: separate, clearing the gradients for the next backward). Each phase is
  * timed in wall and process CPU time (all threads); medians over the iterations, after two
  * warm-up iterations. */
+/* ---- the machine's memory bandwidth: STREAM copy (c = a) and triad (a = b + s c) ----
+ * Three arrays of STREAM_FLOATS floats (96 MB each, far beyond any last-level cache),
+ * first touched in parallel; each kernel STREAM_REPS times on one thread (the whole range
+ * as one mgs_parallel_for grain) and on all threads (grains of 1 M floats). Bytes as
+ * STREAM counts them: copy 8 per element, triad 12 (the write-allocate read of the
+ * destination not counted). Best and median of the repetitions, GB/s = 1e9 bytes/s. */
+#define STREAM_FLOATS ((size_t)24 << 20)
+#define STREAM_REPS 7
+typedef struct stream_ctx { float *a, *b, *c; int kernel; } stream_ctx;
+
+static void stream_range(void *vctx, size_t b, size_t e) {
+  stream_ctx *sc = vctx;
+  float *restrict A = sc->a, *restrict B = sc->b, *restrict C = sc->c;
+  const float s = 3.0f;
+  if (sc->kernel == 0) for (size_t i = b; i < e; i++) A[i] = B[i] = C[i] = 1.0f; /* first touch */
+  else if (sc->kernel == 1) for (size_t i = b; i < e; i++) C[i] = A[i];
+  else for (size_t i = b; i < e; i++) A[i] = B[i] + s * C[i];
+}
+
+typedef struct stream_bw { double copy[2][2], triad[2][2]; } stream_bw; /* [1 thread, all][best, median] GB/s */
+
+static int measure_stream(stream_bw *bw) {
+  stream_ctx sc;
+  sc.a = malloc(STREAM_FLOATS * sizeof(float));
+  sc.b = malloc(STREAM_FLOATS * sizeof(float));
+  sc.c = malloc(STREAM_FLOATS * sizeof(float));
+  if (!sc.a || !sc.b || !sc.c) { free(sc.a); free(sc.b); free(sc.c); return 1; }
+  sc.kernel = 0;
+  mgs_parallel_for(0, STREAM_FLOATS, 1 << 20, stream_range, &sc);
+  for (int all = 0; all < 2; all++)
+    for (int k = 1; k <= 2; k++) {
+      double gbs[STREAM_REPS];
+      sc.kernel = k;
+      for (int rep = 0; rep < STREAM_REPS; rep++) {
+        double t0 = mgs_now();
+        mgs_parallel_for(0, STREAM_FLOATS, all ? (size_t)1 << 20 : STREAM_FLOATS, stream_range, &sc);
+        double dt = mgs_now() - t0;
+        gbs[rep] = (double)STREAM_FLOATS * sizeof(float) * (k == 1 ? 2 : 3) / dt * 1e-9;
+      }
+      qsort(gbs, STREAM_REPS, sizeof(double), cmp_double);
+      double *o = k == 1 ? bw->copy[all] : bw->triad[all];
+      o[0] = gbs[STREAM_REPS - 1];
+      o[1] = gbs[STREAM_REPS / 2];
+    }
+  free(sc.a); free(sc.b); free(sc.c);
+  return 0;
+}
+
 enum { PH_PROJECT, PH_BIN, PH_FWD_TILES, PH_LOSS, PH_ZERO, PH_BWD_TILES, PH_BWD_GAUSS, PH_ADAM, PH_TOTAL, PH_N };
 static const char *const ph_name[PH_N] = {"project+SH", "bin+sort", "forward tiles", "loss L1+SSIM", "zero grads",
                                           "backward tiles", "per-Gaussian bwd", "Adam", "full iteration"};
@@ -265,6 +313,8 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   mgs_gaussians_destroy(other);
   double (*wall)[PH_N] = calloc((size_t)iters, sizeof *wall), (*cpu)[PH_N] = calloc((size_t)iters, sizeof *cpu);
   if (!wall || !cpu) { fprintf(stderr, "morsegs bench raster: out of memory\n"); return 1; }
+  stream_bw bw;
+  if (measure_stream(&bw)) { fprintf(stderr, "morsegs bench raster: out of memory for the stream arrays\n"); return 1; }
   char la0[128], la1[128];
   read_loadavg(la0, sizeof la0);
   const float lam = 0.2f;
@@ -313,11 +363,44 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
     W[PH_TOTAL] = (w[5] - w[0]) * 1e3; C[PH_TOTAL] = (c[5] - c[0]) * 1e3;
   }
   read_loadavg(la1, sizeof la1);
+  /* bytes of the last iteration (the same every iteration: a fixed scene), counted from
+     the layout by the modules that own the arrays */
+  double by[PH_N][2];
+  memset(by, 0, sizeof by);
+  mgs_raster_counts rc;
+  mgs_raster_bytes rb;
+  mgs_raster_last_bytes(r, &rc, &rb);
+  memcpy(by[PH_PROJECT], rb.project, sizeof rb.project);
+  memcpy(by[PH_BIN], rb.bin, sizeof rb.bin);
+  memcpy(by[PH_FWD_TILES], rb.render, sizeof rb.render);
+  memcpy(by[PH_BWD_TILES], rb.tiles, sizeof rb.tiles);
+  memcpy(by[PH_BWD_GAUSS], rb.reduce, sizeof rb.reduce);
+  {
+    double l1[2], ss[2], ps[2];
+    mgs_loss_l1_bytes(size, size, 3, l1);
+    mgs_ssim_bytes(size, size, 3, ss);
+    mgs_psnr_bytes(size, size, 3, ps);
+    by[PH_LOSS][0] = l1[0] + ss[0] + ps[0];
+    by[PH_LOSS][1] = l1[1] + ss[1] + ps[1] + (double)np * sizeof(float); /* + clearing dL */
+    double ar, aw;
+    mgs_adam_bytes(adam, n, (1u << MGS_PARAM_COUNT) - 1, !fused, !fused, &ar, &aw);
+    int k = fused ? PH_BWD_GAUSS : PH_ADAM;
+    by[k][0] += ar; by[k][1] += aw;
+    for (int q = 0; q < PH_TOTAL; q++) { by[PH_TOTAL][0] += by[q][0]; by[PH_TOTAL][1] += by[q][1]; }
+  }
   printf("full training iteration: %dx%d, %zu Gaussians, SH degree 3, %zu tile intersections, %d iterations "
          "(median), %d threads, final loss %.4f\n", size, size, n, isect, iters, mgs_parallel_max_threads(), loss);
   printf("load average before: %s | after: %s\n", la0, la1);
   printf("backward and Adam: %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)");
-  printf("  %-18s %9s %9s\n", "phase", "wall ms", "CPU ms");
+  printf("stream bandwidth (measured before the iterations, GB/s best / median of %d): copy 1 thread %.1f / %.1f, "
+         "all threads %.1f / %.1f; triad 1 thread %.1f / %.1f, all threads %.1f / %.1f\n", STREAM_REPS, bw.copy[0][0],
+         bw.copy[0][1], bw.copy[1][0], bw.copy[1][1], bw.triad[0][0], bw.triad[0][1], bw.triad[1][0], bw.triad[1][1]);
+  printf("counts: %zu Gaussians, %zu in front, %zu shaded, %zu binned, %zu intersections (forward visited %zu, backward "
+         "%zu), %zu with a gradient, %d sort passes\n", rc.n, rc.n_front, rc.n_shaded, rc.n_binned, rc.n_isect,
+         rc.fwd_visit, rc.bwd_visit, rc.n_live, rc.sort_passes);
+  printf("bytes counted from the data layout (render/raster_bytes.c, render/loss_*.c, train/adam.c); GB/s = bytes / "
+         "median wall; %% bw = of the all-threads triad (best)\n");
+  printf("  %-18s %9s %9s %9s %9s %8s %6s\n", "phase", "wall ms", "CPU ms", "MB read", "MB write", "GB/s", "% bw");
   double col[2][PH_N];
   double *tmp = malloc((size_t)iters * sizeof(double));
   for (int k = 0; k < PH_N; k++)
@@ -329,9 +412,16 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   double sw = 0, sc = 0;
   for (int k = 0; k < PH_N; k++) {
     if (k == PH_TOTAL) printf("  %-18s %9.2f %9.2f\n", "(sum of medians)", sw, sc);
-    printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
+    double b = by[k][0] + by[k][1], gbs = col[0][k] > 0 ? b / (col[0][k] * 1e-3) * 1e-9 : 0;
+    if (b > 0)
+      printf("  %-18s %9.2f %9.2f %9.2f %9.2f %8.1f %5.0f%%\n", ph_name[k], col[0][k], col[1][k], by[k][0] * 1e-6,
+             by[k][1] * 1e-6, gbs, 100 * gbs / bw.triad[1][0]);
+    else printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
     if (k < PH_TOTAL) { sw += col[0][k]; sc += col[1][k]; }
   }
+  double floor_ms = (by[PH_TOTAL][0] + by[PH_TOTAL][1]) / (bw.triad[1][0] * 1e9) * 1e3;
+  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the triad's rate)\n",
+         (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad[1][0], floor_ms);
   printf("full iteration %dx%d %zuk SH3: %.2f ms wall, %.2f ms CPU (median; load %s)\n", size, size, n / 1000, col[0][PH_TOTAL],
          col[1][PH_TOTAL], la1);
   free(tmp); free(wall); free(cpu);

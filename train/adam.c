@@ -215,6 +215,21 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
   return MGS_OK;
 }
 
+void mgs_adam_bytes(const mgs_adam *a, size_t rows, unsigned group_mask, int grad_arrays, int zero_grad,
+                    double *read, double *written) {
+  double fl = 0; /* active floats per row over the selected groups */
+  for (int gi = 0; gi < MGS_PARAM_COUNT; gi++) {
+    if (!(group_mask & (1u << gi))) continue;
+    int d = mgs_param_dim((mgs_param_group)gi);
+    /* as mgs_adam_prepare: a partly active SH-rest group steps its first 3*active floats */
+    if (gi == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) d = 3 * a->sh_rest_active;
+    fl += d;
+  }
+  double per = (double)rows * fl * sizeof(float);
+  *read = 3 * per + (grad_arrays ? per : 0);       /* p, m, v (+ g) */
+  *written = 3 * per + (grad_arrays && zero_grad ? per : 0);
+}
+
 mgs_status mgs_adam_report(mgs_param_group group, size_t gaussian, int value, mgs_error *err) {
   if (!value)
     return mgs_error_set(err, MGS_ERR_NUMERIC, "non-finite gradient in parameter group '%s' (Gaussian %zu)",

@@ -89,6 +89,14 @@ mgs_status mgs_adam_step_sparse(mgs_adam *a, mgs_gaussians *model, mgs_gaussians
 mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                          const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                          unsigned group_mask, const int *radii, mgs_error *err);
+/* Bytes one Adam step reads and writes, counted from the layout (train/adam.c): for every
+ * stepped row (rows: model->n for a dense step, the rows with radii > 0 for a sparse one)
+ * and every active float of each group in group_mask, the parameter and its two moments
+ * read and written (24 bytes); the gradient read from gradient arrays when grad_arrays
+ * (and written back as 0 with zero_grad), not counted when it comes from a fused
+ * backward's 64-Gaussian block, which stays in L1. */
+void mgs_adam_bytes(const mgs_adam *a, size_t rows, unsigned group_mask, int grad_arrays, int zero_grad,
+                    double *read, double *written);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);

@@ -280,7 +280,7 @@ static void read_loadavg(char *buf, size_t len) {
   if (l && buf[l - 1] == '\n') buf[l - 1] = 0;
 }
 
-static int run_iteration(int size, size_t n, int iters, int fused) {
+static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
   mgs_error err;
   mgs_error_clear(&err);
   mgs_gaussians *g = bench_scene(n, 12345), *other = bench_scene(n, 777);
@@ -295,6 +295,7 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   adam->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; adam->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; adam->lr[MGS_PARAM_ROT] = 1e-3f;
   adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
   adam->sh_rest_active = 15;
+  mgs_adam_set_sh_rest_bf16(adam, bf16);
   mgs_camera cam;
   mgs_camera_init_fovx(&cam, size, size, 60.0 * 3.14159265358979 / 180.0);
   double eye[3] = {2.4, -2.8, 1.6}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
@@ -391,16 +392,20 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   printf("full training iteration: %dx%d, %zu Gaussians, SH degree 3, %zu tile intersections, %d iterations "
          "(median), %d threads, final loss %.4f\n", size, size, n, isect, iters, mgs_parallel_max_threads(), loss);
   printf("load average before: %s | after: %s\n", la0, la1);
-  printf("backward and Adam: %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)");
+  printf("backward and Adam: %s; SH-rest moments %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)",
+         bf16 ? "bfloat16 (--sh-moments-bf16)" : "float");
   printf("stream bandwidth (measured before the iterations, GB/s best / median of %d): copy 1 thread %.1f / %.1f, "
          "all threads %.1f / %.1f; triad 1 thread %.1f / %.1f, all threads %.1f / %.1f\n", STREAM_REPS, bw.copy[0][0],
          bw.copy[0][1], bw.copy[1][0], bw.copy[1][1], bw.triad[0][0], bw.triad[0][1], bw.triad[1][0], bw.triad[1][1]);
   printf("counts: %zu Gaussians, %zu in front, %zu shaded, %zu binned, %zu intersections (forward visited %zu, backward "
          "%zu), %zu with a gradient, %d sort passes\n", rc.n, rc.n_front, rc.n_shaded, rc.n_binned, rc.n_isect,
          rc.fwd_visit, rc.bwd_visit, rc.n_live, rc.sort_passes);
+  int nthr = mgs_parallel_max_threads();
   printf("bytes counted from the data layout (render/raster_bytes.c, render/loss_*.c, train/adam.c); GB/s = bytes / "
-         "median wall; %% bw = of the all-threads triad (best)\n");
-  printf("  %-18s %9s %9s %9s %9s %8s %6s\n", "phase", "wall ms", "CPU ms", "MB read", "MB write", "GB/s", "% bw");
+         "median wall, cpu GB/s = bytes / (median CPU ms / %d threads) (what an unshared machine would see when the "
+         "phase keeps all threads busy); %% bw = cpu GB/s of the all-threads triad (best)\n", nthr);
+  printf("  %-18s %9s %9s %9s %9s %8s %8s %6s\n", "phase", "wall ms", "CPU ms", "MB read", "MB write", "GB/s", "cpu GB/s",
+         "% bw");
   double col[2][PH_N];
   double *tmp = malloc((size_t)iters * sizeof(double));
   for (int k = 0; k < PH_N; k++)
@@ -413,15 +418,17 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   for (int k = 0; k < PH_N; k++) {
     if (k == PH_TOTAL) printf("  %-18s %9.2f %9.2f\n", "(sum of medians)", sw, sc);
     double b = by[k][0] + by[k][1], gbs = col[0][k] > 0 ? b / (col[0][k] * 1e-3) * 1e-9 : 0;
+    double cgbs = col[1][k] > 0 ? b / (col[1][k] / nthr * 1e-3) * 1e-9 : 0;
     if (b > 0)
-      printf("  %-18s %9.2f %9.2f %9.2f %9.2f %8.1f %5.0f%%\n", ph_name[k], col[0][k], col[1][k], by[k][0] * 1e-6,
-             by[k][1] * 1e-6, gbs, 100 * gbs / bw.triad[1][0]);
+      printf("  %-18s %9.2f %9.2f %9.2f %9.2f %8.1f %8.1f %5.0f%%\n", ph_name[k], col[0][k], col[1][k], by[k][0] * 1e-6,
+             by[k][1] * 1e-6, gbs, cgbs, 100 * cgbs / bw.triad[1][0]);
     else printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
     if (k < PH_TOTAL) { sw += col[0][k]; sc += col[1][k]; }
   }
   double floor_ms = (by[PH_TOTAL][0] + by[PH_TOTAL][1]) / (bw.triad[1][0] * 1e9) * 1e3;
-  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the triad's rate)\n",
-         (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad[1][0], floor_ms);
+  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the triad's rate); "
+         "CPU ms / %d threads = %.2f ms\n", (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad[1][0], floor_ms, nthr,
+         col[1][PH_TOTAL] / nthr);
   printf("full iteration %dx%d %zuk SH3: %.2f ms wall, %.2f ms CPU (median; load %s)\n", size, size, n / 1000, col[0][PH_TOTAL],
          col[1][PH_TOTAL], la1);
   free(tmp); free(wall); free(cpu);
@@ -545,9 +552,9 @@ int mgs_bench_raster(int argc, char **argv) {
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"threads", required_argument, 0, 't'},
                                            {"size", required_argument, 0, 's'}, {"gaussians", required_argument, 0, 'n'},
                                            {"iteration", no_argument, 0, 'I'}, {"iters", required_argument, 0, 'i'},
-                                           {"unfused", no_argument, 0, 'U'}, {"model", required_argument, 0, 'M'},
+                                           {"unfused", no_argument, 0, 'U'}, {"sh-moments-bf16", no_argument, 0, 'B'}, {"model", required_argument, 0, 'M'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0, iteration = 0, unfused = 0, model2 = 0;
+  int quick = 0, iteration = 0, unfused = 0, model2 = 0, bf16 = 0;
   long iters = 50;
   long threads = 0, one_size = 0, one_n = 0;
   optind = 1;
@@ -559,6 +566,7 @@ int mgs_bench_raster(int argc, char **argv) {
     case 'q': quick = 1; break;
     case 'I': iteration = 1; break;
     case 'U': unfused = 1; break;
+    case 'B': bf16 = 1; break;
     case 'M':
       if (strcmp(optarg, "2dgs") && strcmp(optarg, "3dgs")) {
         fprintf(stderr, "morsegs bench raster: bad --model '%s' (3dgs or 2dgs)\n", optarg);
@@ -590,10 +598,13 @@ int mgs_bench_raster(int argc, char **argv) {
              "  --threads N  worker threads (default: all cores)\n"
              "  --size S --gaussians N  one case only (SxS image, N Gaussians)\n"
              "  --iteration  a whole training iteration instead (forward, L1+D-SSIM, backward, Adam; SH 3)\n"
-             "               split by phase, wall and CPU ms; default 200x200, 100k Gaussians\n"
+             "               split by phase, wall and CPU ms, bytes read and written per phase (counted from\n"
+             "               the data layout) against the machine's stream bandwidth measured in the same run;\n"
+             "               default 200x200, 100k Gaussians\n"
              "  --iters N    iterations timed by --iteration (50)\n"
              "  --unfused    --iteration with the backward and Adam as separate passes (as the trainer on\n"
              "               densification steps)\n"
+             "  --sh-moments-bf16  --iteration with the SH-rest Adam moments in bfloat16 (train --sh-moments-bf16)\n"
              "  --model 2dgs a training iteration of 2DGS surfels against 3DGS on the same scene, alternated\n"
              "               in one run (default 200x200, 100k primitives; --iters pairs, 50)\n");
       return 0;
@@ -603,7 +614,7 @@ int mgs_bench_raster(int argc, char **argv) {
   if (optind < argc) { fprintf(stderr, "morsegs bench raster: unexpected argument '%s'\n", argv[optind]); return 2; }
   if (threads > 0) mgs_parallel_set_threads((int)threads);
   if (model2) return run_model_pair(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters);
-  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused);
+  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused, bf16);
   int nthr = mgs_parallel_max_threads();
   const char *isa = "";
   double peak = measure_peak(&isa);

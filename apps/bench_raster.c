@@ -219,12 +219,14 @@ static int run_case(int size, size_t n, double min_time, bench_result *res) {
  * timed in wall and process CPU time (all threads); medians over the iterations, after two
  * warm-up iterations. */
 /* ---- the machine's memory bandwidth: STREAM copy (c = a) and triad (a = b + s c) ----
- * Three arrays of STREAM_FLOATS floats (96 MB each, far beyond any last-level cache),
+ * Three arrays of STREAM_FLOATS floats (192 MB each, far beyond any last-level cache),
  * first touched in parallel; each kernel STREAM_REPS times on one thread (the whole range
  * as one mgs_parallel_for grain) and on all threads (grains of 1 M floats). Bytes as
  * STREAM counts them: copy 8 per element, triad 12 (the write-allocate read of the
- * destination not counted). Best and median of the repetitions, GB/s = 1e9 bytes/s. */
-#define STREAM_FLOATS ((size_t)24 << 20)
+ * destination not counted). Best and median of the repetitions, GB/s = 1e9 bytes/s, on
+ * wall time and on process CPU time / threads (a shared machine takes the threads off the
+ * cores: the CPU basis is what the phases' cpu GB/s compare with). */
+#define STREAM_FLOATS ((size_t)48 << 20)
 #define STREAM_REPS 7
 typedef struct stream_ctx { float *a, *b, *c; int kernel; } stream_ctx;
 
@@ -237,7 +239,8 @@ static void stream_range(void *vctx, size_t b, size_t e) {
   else for (size_t i = b; i < e; i++) A[i] = B[i] + s * C[i];
 }
 
-typedef struct stream_bw { double copy[2][2], triad[2][2]; } stream_bw; /* [1 thread, all][best, median] GB/s */
+/* [1 thread, all][best, median] GB/s; cpu: on CPU time */
+typedef struct stream_bw { double copy[2][2], triad[2][2], copy_cpu[2][2], triad_cpu[2][2]; } stream_bw;
 
 static int measure_stream(stream_bw *bw) {
   stream_ctx sc;
@@ -249,18 +252,24 @@ static int measure_stream(stream_bw *bw) {
   mgs_parallel_for(0, STREAM_FLOATS, 1 << 20, stream_range, &sc);
   for (int all = 0; all < 2; all++)
     for (int k = 1; k <= 2; k++) {
-      double gbs[STREAM_REPS];
+      double gbs[STREAM_REPS], gbc[STREAM_REPS];
       sc.kernel = k;
+      int thr = all ? mgs_parallel_max_threads() : 1;
       for (int rep = 0; rep < STREAM_REPS; rep++) {
-        double t0 = mgs_now();
+        double c0 = cpu_now(), t0 = mgs_now();
         mgs_parallel_for(0, STREAM_FLOATS, all ? (size_t)1 << 20 : STREAM_FLOATS, stream_range, &sc);
-        double dt = mgs_now() - t0;
-        gbs[rep] = (double)STREAM_FLOATS * sizeof(float) * (k == 1 ? 2 : 3) / dt * 1e-9;
+        double dt = mgs_now() - t0, dc = (cpu_now() - c0) / thr;
+        double bytes = (double)STREAM_FLOATS * sizeof(float) * (k == 1 ? 2 : 3);
+        gbs[rep] = bytes / dt * 1e-9;
+        gbc[rep] = bytes / (dc > 0 ? dc : dt) * 1e-9;
       }
       qsort(gbs, STREAM_REPS, sizeof(double), cmp_double);
-      double *o = k == 1 ? bw->copy[all] : bw->triad[all];
+      qsort(gbc, STREAM_REPS, sizeof(double), cmp_double);
+      double *o = k == 1 ? bw->copy[all] : bw->triad[all], *oc = k == 1 ? bw->copy_cpu[all] : bw->triad_cpu[all];
       o[0] = gbs[STREAM_REPS - 1];
       o[1] = gbs[STREAM_REPS / 2];
+      oc[0] = gbc[STREAM_REPS - 1];
+      oc[1] = gbc[STREAM_REPS / 2];
     }
   free(sc.a); free(sc.b); free(sc.c);
   return 0;
@@ -397,13 +406,16 @@ static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
   printf("stream bandwidth (measured before the iterations, GB/s best / median of %d): copy 1 thread %.1f / %.1f, "
          "all threads %.1f / %.1f; triad 1 thread %.1f / %.1f, all threads %.1f / %.1f\n", STREAM_REPS, bw.copy[0][0],
          bw.copy[0][1], bw.copy[1][0], bw.copy[1][1], bw.triad[0][0], bw.triad[0][1], bw.triad[1][0], bw.triad[1][1]);
+  printf("  on CPU time (bytes / (CPU s / threads)): copy 1 thread %.1f / %.1f, all threads %.1f / %.1f; triad 1 thread "
+         "%.1f / %.1f, all threads %.1f / %.1f\n", bw.copy_cpu[0][0], bw.copy_cpu[0][1], bw.copy_cpu[1][0],
+         bw.copy_cpu[1][1], bw.triad_cpu[0][0], bw.triad_cpu[0][1], bw.triad_cpu[1][0], bw.triad_cpu[1][1]);
   printf("counts: %zu Gaussians, %zu in front, %zu shaded, %zu binned, %zu intersections (forward visited %zu, backward "
          "%zu), %zu with a gradient, %d sort passes\n", rc.n, rc.n_front, rc.n_shaded, rc.n_binned, rc.n_isect,
          rc.fwd_visit, rc.bwd_visit, rc.n_live, rc.sort_passes);
   int nthr = mgs_parallel_max_threads();
   printf("bytes counted from the data layout (render/raster_bytes.c, render/loss_*.c, train/adam.c); GB/s = bytes / "
          "median wall, cpu GB/s = bytes / (median CPU ms / %d threads) (what an unshared machine would see when the "
-         "phase keeps all threads busy); %% bw = cpu GB/s of the all-threads triad (best)\n", nthr);
+         "phase keeps all threads busy); %% bw = cpu GB/s of the all-threads triad on CPU time (best)\n", nthr);
   printf("  %-18s %9s %9s %9s %9s %8s %8s %6s\n", "phase", "wall ms", "CPU ms", "MB read", "MB write", "GB/s", "cpu GB/s",
          "% bw");
   double col[2][PH_N];
@@ -421,13 +433,13 @@ static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
     double cgbs = col[1][k] > 0 ? b / (col[1][k] / nthr * 1e-3) * 1e-9 : 0;
     if (b > 0)
       printf("  %-18s %9.2f %9.2f %9.2f %9.2f %8.1f %8.1f %5.0f%%\n", ph_name[k], col[0][k], col[1][k], by[k][0] * 1e-6,
-             by[k][1] * 1e-6, gbs, cgbs, 100 * cgbs / bw.triad[1][0]);
+             by[k][1] * 1e-6, gbs, cgbs, 100 * cgbs / bw.triad_cpu[1][0]);
     else printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
     if (k < PH_TOTAL) { sw += col[0][k]; sc += col[1][k]; }
   }
-  double floor_ms = (by[PH_TOTAL][0] + by[PH_TOTAL][1]) / (bw.triad[1][0] * 1e9) * 1e3;
-  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the triad's rate); "
-         "CPU ms / %d threads = %.2f ms\n", (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad[1][0], floor_ms, nthr,
+  double floor_ms = (by[PH_TOTAL][0] + by[PH_TOTAL][1]) / (bw.triad_cpu[1][0] * 1e9) * 1e3;
+  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the CPU-time triad's rate); "
+         "CPU ms / %d threads = %.2f ms\n", (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad_cpu[1][0], floor_ms, nthr,
          col[1][PH_TOTAL] / nthr);
   printf("full iteration %dx%d %zuk SH3: %.2f ms wall, %.2f ms CPU (median; load %s)\n", size, size, n / 1000, col[0][PH_TOTAL],
          col[1][PH_TOTAL], la1);

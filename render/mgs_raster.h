@@ -101,7 +101,8 @@ void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
  * bytes: a gathered 48-byte splat counts 48 whatever cache lines it spans, each sweep of
  * an array counts (a second sweep may hit the cache), per-thread scratch that stays in L1
  * (a sink's 64-Gaussian gradient block, tile registers) does not. 3DGS only (a 2DGS
- * forward leaves everything 0). */
+ * forward leaves everything 0); a listed forward (mgs_raster_forward_list) is counted as
+ * the whole model's. */
 typedef struct mgs_raster_counts {
   size_t n;           /* Gaussians of the model */
   size_t n_front;     /* passed the near plane and finiteness test (scales read) */

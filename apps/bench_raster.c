@@ -218,6 +218,63 @@ static int run_case(int size, size_t n, double min_time, bench_result *res) {
  * steps (--unfused: separate, clearing the gradients for the next backward). Each phase is
  * timed in wall and process CPU time (all threads); medians over the iterations, after two
  * warm-up iterations. */
+/* ---- the machine's memory bandwidth: STREAM copy (c = a) and triad (a = b + s c) ----
+ * Three arrays of STREAM_FLOATS floats (192 MB each, far beyond any last-level cache),
+ * first touched in parallel; each kernel STREAM_REPS times on one thread (the whole range
+ * as one mgs_parallel_for grain) and on all threads (grains of 1 M floats). Bytes as
+ * STREAM counts them: copy 8 per element, triad 12 (the write-allocate read of the
+ * destination not counted). Best and median of the repetitions, GB/s = 1e9 bytes/s, on
+ * wall time and on process CPU time / threads (a shared machine takes the threads off the
+ * cores: the CPU basis is what the phases' cpu GB/s compare with). */
+#define STREAM_FLOATS ((size_t)48 << 20)
+#define STREAM_REPS 7
+typedef struct stream_ctx { float *a, *b, *c; int kernel; } stream_ctx;
+
+static void stream_range(void *vctx, size_t b, size_t e) {
+  stream_ctx *sc = vctx;
+  float *restrict A = sc->a, *restrict B = sc->b, *restrict C = sc->c;
+  const float s = 3.0f;
+  if (sc->kernel == 0) for (size_t i = b; i < e; i++) A[i] = B[i] = C[i] = 1.0f; /* first touch */
+  else if (sc->kernel == 1) for (size_t i = b; i < e; i++) C[i] = A[i];
+  else for (size_t i = b; i < e; i++) A[i] = B[i] + s * C[i];
+}
+
+/* [1 thread, all][best, median] GB/s; cpu: on CPU time */
+typedef struct stream_bw { double copy[2][2], triad[2][2], copy_cpu[2][2], triad_cpu[2][2]; } stream_bw;
+
+static int measure_stream(stream_bw *bw) {
+  stream_ctx sc;
+  sc.a = malloc(STREAM_FLOATS * sizeof(float));
+  sc.b = malloc(STREAM_FLOATS * sizeof(float));
+  sc.c = malloc(STREAM_FLOATS * sizeof(float));
+  if (!sc.a || !sc.b || !sc.c) { free(sc.a); free(sc.b); free(sc.c); return 1; }
+  sc.kernel = 0;
+  mgs_parallel_for(0, STREAM_FLOATS, 1 << 20, stream_range, &sc);
+  for (int all = 0; all < 2; all++)
+    for (int k = 1; k <= 2; k++) {
+      double gbs[STREAM_REPS], gbc[STREAM_REPS];
+      sc.kernel = k;
+      int thr = all ? mgs_parallel_max_threads() : 1;
+      for (int rep = 0; rep < STREAM_REPS; rep++) {
+        double c0 = cpu_now(), t0 = mgs_now();
+        mgs_parallel_for(0, STREAM_FLOATS, all ? (size_t)1 << 20 : STREAM_FLOATS, stream_range, &sc);
+        double dt = mgs_now() - t0, dc = (cpu_now() - c0) / thr;
+        double bytes = (double)STREAM_FLOATS * sizeof(float) * (k == 1 ? 2 : 3);
+        gbs[rep] = bytes / dt * 1e-9;
+        gbc[rep] = bytes / (dc > 0 ? dc : dt) * 1e-9;
+      }
+      qsort(gbs, STREAM_REPS, sizeof(double), cmp_double);
+      qsort(gbc, STREAM_REPS, sizeof(double), cmp_double);
+      double *o = k == 1 ? bw->copy[all] : bw->triad[all], *oc = k == 1 ? bw->copy_cpu[all] : bw->triad_cpu[all];
+      o[0] = gbs[STREAM_REPS - 1];
+      o[1] = gbs[STREAM_REPS / 2];
+      oc[0] = gbc[STREAM_REPS - 1];
+      oc[1] = gbc[STREAM_REPS / 2];
+    }
+  free(sc.a); free(sc.b); free(sc.c);
+  return 0;
+}
+
 enum { PH_PROJECT, PH_BIN, PH_FWD_TILES, PH_LOSS, PH_ZERO, PH_BWD_TILES, PH_BWD_GAUSS, PH_ADAM, PH_TOTAL, PH_N };
 static const char *const ph_name[PH_N] = {"project+SH", "bin+sort", "forward tiles", "loss L1+SSIM", "zero grads",
                                           "backward tiles", "per-Gaussian bwd", "Adam", "full iteration"};
@@ -232,7 +289,7 @@ static void read_loadavg(char *buf, size_t len) {
   if (l && buf[l - 1] == '\n') buf[l - 1] = 0;
 }
 
-static int run_iteration(int size, size_t n, int iters, int fused) {
+static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
   mgs_error err;
   mgs_error_clear(&err);
   mgs_gaussians *g = bench_scene(n, 12345), *other = bench_scene(n, 777);
@@ -247,6 +304,7 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   adam->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; adam->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; adam->lr[MGS_PARAM_ROT] = 1e-3f;
   adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
   adam->sh_rest_active = 15;
+  mgs_adam_set_sh_rest_bf16(adam, bf16);
   mgs_camera cam;
   mgs_camera_init_fovx(&cam, size, size, 60.0 * 3.14159265358979 / 180.0);
   double eye[3] = {2.4, -2.8, 1.6}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
@@ -265,6 +323,8 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   mgs_gaussians_destroy(other);
   double (*wall)[PH_N] = calloc((size_t)iters, sizeof *wall), (*cpu)[PH_N] = calloc((size_t)iters, sizeof *cpu);
   if (!wall || !cpu) { fprintf(stderr, "morsegs bench raster: out of memory\n"); return 1; }
+  stream_bw bw;
+  if (measure_stream(&bw)) { fprintf(stderr, "morsegs bench raster: out of memory for the stream arrays\n"); return 1; }
   char la0[128], la1[128];
   read_loadavg(la0, sizeof la0);
   const float lam = 0.2f;
@@ -313,11 +373,51 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
     W[PH_TOTAL] = (w[5] - w[0]) * 1e3; C[PH_TOTAL] = (c[5] - c[0]) * 1e3;
   }
   read_loadavg(la1, sizeof la1);
+  /* bytes of the last iteration (the same every iteration: a fixed scene), counted from
+     the layout by the modules that own the arrays */
+  double by[PH_N][2];
+  memset(by, 0, sizeof by);
+  mgs_raster_counts rc;
+  mgs_raster_bytes rb;
+  mgs_raster_last_bytes(r, &rc, &rb);
+  memcpy(by[PH_PROJECT], rb.project, sizeof rb.project);
+  memcpy(by[PH_BIN], rb.bin, sizeof rb.bin);
+  memcpy(by[PH_FWD_TILES], rb.render, sizeof rb.render);
+  memcpy(by[PH_BWD_TILES], rb.tiles, sizeof rb.tiles);
+  memcpy(by[PH_BWD_GAUSS], rb.reduce, sizeof rb.reduce);
+  {
+    double l1[2], ss[2], ps[2];
+    mgs_loss_l1_bytes(size, size, 3, l1);
+    mgs_ssim_bytes(size, size, 3, ss);
+    mgs_psnr_bytes(size, size, 3, ps);
+    by[PH_LOSS][0] = l1[0] + ss[0] + ps[0];
+    by[PH_LOSS][1] = l1[1] + ss[1] + ps[1] + (double)np * sizeof(float); /* + clearing dL */
+    double ar, aw;
+    mgs_adam_bytes(adam, n, (1u << MGS_PARAM_COUNT) - 1, !fused, !fused, &ar, &aw);
+    int k = fused ? PH_BWD_GAUSS : PH_ADAM;
+    by[k][0] += ar; by[k][1] += aw;
+    for (int q = 0; q < PH_TOTAL; q++) { by[PH_TOTAL][0] += by[q][0]; by[PH_TOTAL][1] += by[q][1]; }
+  }
   printf("full training iteration: %dx%d, %zu Gaussians, SH degree 3, %zu tile intersections, %d iterations "
          "(median), %d threads, final loss %.4f\n", size, size, n, isect, iters, mgs_parallel_max_threads(), loss);
   printf("load average before: %s | after: %s\n", la0, la1);
-  printf("backward and Adam: %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)");
-  printf("  %-18s %9s %9s\n", "phase", "wall ms", "CPU ms");
+  printf("backward and Adam: %s; SH-rest moments %s\n", fused ? "fused (mgs_adam_step_backward; per-Gaussian bwd includes Adam)" : "separate (--unfused)",
+         bf16 ? "bfloat16 (--sh-moments-bf16)" : "float");
+  printf("stream bandwidth (measured before the iterations, GB/s best / median of %d): copy 1 thread %.1f / %.1f, "
+         "all threads %.1f / %.1f; triad 1 thread %.1f / %.1f, all threads %.1f / %.1f\n", STREAM_REPS, bw.copy[0][0],
+         bw.copy[0][1], bw.copy[1][0], bw.copy[1][1], bw.triad[0][0], bw.triad[0][1], bw.triad[1][0], bw.triad[1][1]);
+  printf("  on CPU time (bytes / (CPU s / threads)): copy 1 thread %.1f / %.1f, all threads %.1f / %.1f; triad 1 thread "
+         "%.1f / %.1f, all threads %.1f / %.1f\n", bw.copy_cpu[0][0], bw.copy_cpu[0][1], bw.copy_cpu[1][0],
+         bw.copy_cpu[1][1], bw.triad_cpu[0][0], bw.triad_cpu[0][1], bw.triad_cpu[1][0], bw.triad_cpu[1][1]);
+  printf("counts: %zu Gaussians, %zu in front, %zu shaded, %zu binned, %zu intersections (forward visited %zu, backward "
+         "%zu), %zu with a gradient, %d sort passes\n", rc.n, rc.n_front, rc.n_shaded, rc.n_binned, rc.n_isect,
+         rc.fwd_visit, rc.bwd_visit, rc.n_live, rc.sort_passes);
+  int nthr = mgs_parallel_max_threads();
+  printf("bytes counted from the data layout (render/raster_bytes.c, render/loss_*.c, train/adam.c); GB/s = bytes / "
+         "median wall, cpu GB/s = bytes / (median CPU ms / %d threads) (what an unshared machine would see when the "
+         "phase keeps all threads busy); %% bw = cpu GB/s of the all-threads triad on CPU time (best)\n", nthr);
+  printf("  %-18s %9s %9s %9s %9s %8s %8s %6s\n", "phase", "wall ms", "CPU ms", "MB read", "MB write", "GB/s", "cpu GB/s",
+         "% bw");
   double col[2][PH_N];
   double *tmp = malloc((size_t)iters * sizeof(double));
   for (int k = 0; k < PH_N; k++)
@@ -329,9 +429,18 @@ static int run_iteration(int size, size_t n, int iters, int fused) {
   double sw = 0, sc = 0;
   for (int k = 0; k < PH_N; k++) {
     if (k == PH_TOTAL) printf("  %-18s %9.2f %9.2f\n", "(sum of medians)", sw, sc);
-    printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
+    double b = by[k][0] + by[k][1], gbs = col[0][k] > 0 ? b / (col[0][k] * 1e-3) * 1e-9 : 0;
+    double cgbs = col[1][k] > 0 ? b / (col[1][k] / nthr * 1e-3) * 1e-9 : 0;
+    if (b > 0)
+      printf("  %-18s %9.2f %9.2f %9.2f %9.2f %8.1f %8.1f %5.0f%%\n", ph_name[k], col[0][k], col[1][k], by[k][0] * 1e-6,
+             by[k][1] * 1e-6, gbs, cgbs, 100 * cgbs / bw.triad_cpu[1][0]);
+    else printf("  %-18s %9.2f %9.2f\n", ph_name[k], col[0][k], col[1][k]);
     if (k < PH_TOTAL) { sw += col[0][k]; sc += col[1][k]; }
   }
+  double floor_ms = (by[PH_TOTAL][0] + by[PH_TOTAL][1]) / (bw.triad_cpu[1][0] * 1e9) * 1e3;
+  printf("bandwidth floor: %.1f MB / %.1f GB/s = %.2f ms (the iteration if every byte moved at the CPU-time triad's rate); "
+         "CPU ms / %d threads = %.2f ms\n", (by[PH_TOTAL][0] + by[PH_TOTAL][1]) * 1e-6, bw.triad_cpu[1][0], floor_ms, nthr,
+         col[1][PH_TOTAL] / nthr);
   printf("full iteration %dx%d %zuk SH3: %.2f ms wall, %.2f ms CPU (median; load %s)\n", size, size, n / 1000, col[0][PH_TOTAL],
          col[1][PH_TOTAL], la1);
   free(tmp); free(wall); free(cpu);
@@ -455,9 +564,9 @@ int mgs_bench_raster(int argc, char **argv) {
   static const struct option longopts[] = {{"quick", no_argument, 0, 'q'}, {"threads", required_argument, 0, 't'},
                                            {"size", required_argument, 0, 's'}, {"gaussians", required_argument, 0, 'n'},
                                            {"iteration", no_argument, 0, 'I'}, {"iters", required_argument, 0, 'i'},
-                                           {"unfused", no_argument, 0, 'U'}, {"model", required_argument, 0, 'M'},
+                                           {"unfused", no_argument, 0, 'U'}, {"sh-moments-bf16", no_argument, 0, 'B'}, {"model", required_argument, 0, 'M'},
                                            {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int quick = 0, iteration = 0, unfused = 0, model2 = 0;
+  int quick = 0, iteration = 0, unfused = 0, model2 = 0, bf16 = 0;
   long iters = 50;
   long threads = 0, one_size = 0, one_n = 0;
   optind = 1;
@@ -469,6 +578,7 @@ int mgs_bench_raster(int argc, char **argv) {
     case 'q': quick = 1; break;
     case 'I': iteration = 1; break;
     case 'U': unfused = 1; break;
+    case 'B': bf16 = 1; break;
     case 'M':
       if (strcmp(optarg, "2dgs") && strcmp(optarg, "3dgs")) {
         fprintf(stderr, "morsegs bench raster: bad --model '%s' (3dgs or 2dgs)\n", optarg);
@@ -500,10 +610,13 @@ int mgs_bench_raster(int argc, char **argv) {
              "  --threads N  worker threads (default: all cores)\n"
              "  --size S --gaussians N  one case only (SxS image, N Gaussians)\n"
              "  --iteration  a whole training iteration instead (forward, L1+D-SSIM, backward, Adam; SH 3)\n"
-             "               split by phase, wall and CPU ms; default 200x200, 100k Gaussians\n"
+             "               split by phase, wall and CPU ms, bytes read and written per phase (counted from\n"
+             "               the data layout) against the machine's stream bandwidth measured in the same run;\n"
+             "               default 200x200, 100k Gaussians\n"
              "  --iters N    iterations timed by --iteration (50)\n"
              "  --unfused    --iteration with the backward and Adam as separate passes (as the trainer on\n"
              "               densification steps)\n"
+             "  --sh-moments-bf16  --iteration with the SH-rest Adam moments in bfloat16 (train --sh-moments-bf16)\n"
              "  --model 2dgs a training iteration of 2DGS surfels against 3DGS on the same scene, alternated\n"
              "               in one run (default 200x200, 100k primitives; --iters pairs, 50)\n");
       return 0;
@@ -513,7 +626,7 @@ int mgs_bench_raster(int argc, char **argv) {
   if (optind < argc) { fprintf(stderr, "morsegs bench raster: unexpected argument '%s'\n", argv[optind]); return 2; }
   if (threads > 0) mgs_parallel_set_threads((int)threads);
   if (model2) return run_model_pair(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters);
-  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused);
+  if (iteration) return run_iteration(one_size ? (int)one_size : 200, one_n ? (size_t)one_n : 100000, (int)iters, !unfused, bf16);
   int nthr = mgs_parallel_max_threads();
   const char *isa = "";
   double peak = measure_peak(&isa);

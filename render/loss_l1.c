@@ -16,3 +16,9 @@ double mgs_loss_l1(const float *img, const float *gt, int width, int height, int
   }
   return sum / (double)n;
 }
+
+void mgs_loss_l1_bytes(int width, int height, int channels, double rw[2]) {
+  double n = (double)width * height * channels;
+  rw[0] = 3 * n * sizeof(float); /* img, gt, grad (added into) */
+  rw[1] = n * sizeof(float);
+}

@@ -224,3 +224,14 @@ double mgs_ssim(const float *img, const float *gt, int width, int height, int ch
   else atomic_flag_clear(&g_cache_busy);
   return sum / ((double)np * channels);
 }
+
+/* Per channel, in planes of width x height floats: the 5 forward blurs read their source
+ * (x, y, x^2, y^2: one image each, xy: both; 6 planes), write and read back the horizontal
+ * pass (5 + 5) and write the fields (5); pixel_rows reads 5 and writes 3; the 3 backward
+ * blurs each read a plane, write and read the horizontal pass, write the result (6 + 6);
+ * grad_rows reads 3 planes, img, gt and grad and writes grad (6 + 1). */
+void mgs_ssim_bytes(int width, int height, int channels, double rw[2]) {
+  double p = (double)width * height * sizeof(float), rows = (double)channels * height * sizeof(double);
+  rw[0] = channels * (6 + 5 + 5 + 6 + 6) * p + rows;
+  rw[1] = channels * (5 + 5 + 3 + 6 + 1) * p + rows;
+}

@@ -15,3 +15,8 @@ double mgs_psnr(const float *img, const float *gt, int width, int height, int ch
   if (mse < 1e-10) return 100.0;
   return -10.0 * log10(mse);
 }
+
+void mgs_psnr_bytes(int width, int height, int channels, double rw[2]) {
+  rw[0] = 2.0 * width * height * channels * sizeof(float);
+  rw[1] = 0;
+}

@@ -22,6 +22,13 @@ double mgs_ssim(const float *img, const float *gt, int width, int height, int ch
  * give 100 dB (a finite ceiling, since JSON has no infinity). */
 double mgs_psnr(const float *img, const float *gt, int width, int height, int channels);
 
+/* Bytes each function above reads ([0]) and writes ([1]) on a width x height x channels
+ * image with a gradient, counted from its loops (every sweep of an image or scratch plane;
+ * rows kept in L1 not counted): for the benchmark's memory accounting. */
+void mgs_loss_l1_bytes(int width, int height, int channels, double rw[2]);
+void mgs_ssim_bytes(int width, int height, int channels, double rw[2]);
+void mgs_psnr_bytes(int width, int height, int channels, double rw[2]);
+
 #ifdef __cplusplus
 }
 #endif

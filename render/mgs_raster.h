@@ -95,6 +95,41 @@ typedef struct mgs_raster_profile {
 } mgs_raster_profile;
 void mgs_raster_last_profile(const mgs_raster *r, mgs_raster_profile *p);
 
+/* Bytes each phase of the last forward/backward read and wrote, counted from the data
+ * layout (render/raster_bytes.c): for every array a phase sweeps, its element size times
+ * the Gaussians, binned Gaussians, intersections, tiles or pixels it touched. Logical
+ * bytes: a gathered 48-byte splat counts 48 whatever cache lines it spans, each sweep of
+ * an array counts (a second sweep may hit the cache), per-thread scratch that stays in L1
+ * (a sink's 64-Gaussian gradient block, tile registers) does not. 3DGS only (a 2DGS
+ * forward leaves everything 0); a listed forward (mgs_raster_forward_list) is counted as
+ * the whole model's. */
+typedef struct mgs_raster_counts {
+  size_t n;           /* Gaussians of the model */
+  size_t n_front;     /* passed the near plane and finiteness test (scales read) */
+  size_t n_shaded;    /* reached the SH colour (radius > 0) */
+  size_t n_binned;    /* touch >= 1 tile */
+  size_t n_isect;     /* tile intersections */
+  size_t n_tiles, n_pix;
+  size_t n_pix_listed;/* pixels of tiles with a non-empty list (the backward reads only those) */
+  size_t fwd_visit;   /* intersections the forward tiles visited (early stop) */
+  size_t bwd_visit;   /* intersections the backward tiles evaluated (up to each tile's last contributor) */
+  size_t n_live;      /* binned Gaussians with a nonzero summed gradient (the chain ran) */
+  size_t n_vis_blocks;/* sink backward on visible blocks: 64-Gaussian blocks with one of radius > 0 */
+  int sh_degree, sort_passes, bin_chunks;
+  int bwd_kind;       /* 0 no backward, 1 into gradient arrays (+=), 2 into a sink's block */
+  int bwd_alpha, bwd_depth, bwd_mean2d, bwd_visible_only;
+} mgs_raster_counts;
+typedef struct mgs_raster_bytes {
+  double project[2], bin[2], render[2]; /* [0] read, [1] written */
+  double tiles[2], reduce[2];           /* backward tiles, per-Gaussian chain (sink excluded) */
+} mgs_raster_bytes;
+/* The layout's bytes for the given counts (pure arithmetic). */
+void mgs_raster_bytes_of(const mgs_raster_counts *c, mgs_raster_bytes *b);
+/* The counts of the last forward (and backward, if one followed) on r, and their bytes
+ * (either pointer may be NULL). Walks the context's per-Gaussian arrays: call it outside
+ * timed regions. */
+void mgs_raster_last_bytes(const mgs_raster *r, mgs_raster_counts *c, mgs_raster_bytes *b);
+
 /* Output pointers stay valid until the next forward on this context or its destruction. */
 mgs_status mgs_raster_forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam,
                               const mgs_raster_settings *s, mgs_raster_output *out, mgs_error *err);

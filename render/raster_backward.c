@@ -28,6 +28,7 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
   int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
   int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
+  r->tile_visit[2 * tile + 1] = 0;
   if (start == end) { r->tile_evals[tile] = 0; return; }
 
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], K[MGS_TILE_SIZE];
@@ -68,6 +69,7 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
   const v16f one = v16f_set1(1.0f), zero = v16f_set1(0.0f);
   v16f fac = one;
   fac[GS_A] = -0.5f; fac[GS_B2] = -1.0f; fac[GS_C] = -0.5f;
+  r->tile_visit[2 * tile + 1] = (uint32_t)maxn;
   /* Gaussians behind every pixel's last contributor get zero slots */
   for (uint32_t j = start + (uint32_t)maxn; j < end; j++) v16f_store(r->isect_grad + (size_t)r->isect_slot[j] * GS_STRIDE, zero);
   uint32_t evals = 0;
@@ -239,6 +241,9 @@ static mgs_status backward_run(mgs_raster *r, const float *dL_dcolor, const floa
                                float *grad_mean2d, size_t units, size_t grain, mgs_range_fn fn, void *ctx,
                                mgs_error *err) {
   if (grad_mean2d) memset(grad_mean2d, 0, r->n * sizeof(float));
+  r->bwd_alpha = dL_dalpha != NULL;
+  r->bwd_depth = dL_ddepth != NULL;
+  r->bwd_mean2d = grad_mean2d != NULL;
   double c0 = mgs_raster_cpu_now(), t0 = mgs_now();
   if (!r->surfel) mgs_raster_backward_tiles(r, dL_dcolor, dL_dalpha, dL_ddepth);
   else {
@@ -264,6 +269,8 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: gradient model has %zu Gaussians (SH %d), "
                          "the forward had %zu (SH %d)", grad->n, grad->sh_degree, r->n, r->s.sh_degree);
   bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, grad, grad_mean2d};
+  r->bwd_kind = 1;
+  r->bwd_visible_only = 0;
   return backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, r->n, 1024, reduce_range, &bc, err);
 }
 
@@ -293,6 +300,8 @@ static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: the model is not the forward's (%zu Gaussians, "
                          "the forward had %zu)", model->n, r->n);
   sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx, visible_only};
+  r->bwd_kind = 2;
+  r->bwd_visible_only = visible_only;
   st = backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range,
                     &sc, err);
   r->have_forward = 0; /* the sink may have changed the model: another backward needs a new forward */

@@ -97,6 +97,7 @@ static void radix_sort(bin_ctx *c) {
       if (s == c->m) trivial = 1;
     }
     if (trivial) continue;
+    r->sort_passes++;
     uint32_t o = 0;
     for (int d = 0; d < 256; d++)
       for (size_t k = 0; k < c->nc; k++) { uint32_t t = c->hist[k][d]; c->hist[k][d] = o; o += t; }
@@ -158,6 +159,7 @@ static void tile_scatter(void *ctx, size_t kb, size_t ke) {
 mgs_status mgs_raster_bin(mgs_raster *r, mgs_error *err) {
   bin_ctx c;
   c.r = r;
+  r->sort_passes = 0;
   size_t nt = (size_t)r->tiles_x * r->tiles_y;
   /* 1 */
   c.m = r->n;
@@ -190,6 +192,7 @@ mgs_status mgs_raster_bin(mgs_raster *r, mgs_error *err) {
     r->chunk_cnt = q;
     r->cap_chunk_cnt = want;
   }
+  r->bin_chunks = (int)c.nc;
   mgs_parallel_for(0, c.nc, 1, tile_count, &c);
   uint32_t pos = 0;
   for (size_t t = 0; t < nt; t++) {

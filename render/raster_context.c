@@ -25,7 +25,7 @@ static void free_all(mgs_raster *r) {
   free(r->splat); free(r->aux); free(r->radii); free(r->rect); free(r->count);
   free(r->vis_key); free(r->vis_idx); free(r->tmp_key); free(r->tmp_idx); free(r->gauss_off);
   free(r->isect_idx); free(r->isect_slot); free(r->isect_grad);
-  free(r->tile_start); free(r->chunk_cnt); free(r->tile_evals);
+  free(r->tile_start); free(r->chunk_cnt); free(r->tile_evals); free(r->tile_visit);
   free(r->out_color); free(r->out_alpha); free(r->out_depth); free(r->final_T); free(r->n_contrib);
   free(r->map_gnormal); free(r->map_expected); free(r->map_median); free(r->map_normal);
   mgs_raster2d_free(r);
@@ -66,7 +66,8 @@ mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix,
     r->cap_n = c;
   }
   if (tiles > r->cap_tiles) {
-    if (!grow((void **)&r->tile_start, tiles + 1, sizeof(uint32_t)) || !grow((void **)&r->tile_evals, tiles, sizeof(uint32_t)))
+    if (!grow((void **)&r->tile_start, tiles + 1, sizeof(uint32_t)) || !grow((void **)&r->tile_evals, tiles, sizeof(uint32_t)) ||
+        !grow((void **)&r->tile_visit, 2 * tiles, sizeof(uint32_t)))
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_context.c: out of memory for %zu tiles", tiles);
     r->cap_tiles = tiles;
   }

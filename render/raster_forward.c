@@ -88,8 +88,8 @@ static void render_tile(mgs_raster *r, size_t tile) {
   int rowdone[MGS_TILE_SIZE];
   for (int y = 0; y < MGS_TILE_SIZE; y++) { DONE[y] = outside; rowdone[y] = 0; }
   uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1];
-  uint32_t evals = 0;
-  for (uint32_t j = start; j < end; j++) {
+  uint32_t evals = 0, j = start;
+  for (; j < end; j++) {
     if (j + 8 < end) { /* the splats are gathered: fetch ahead */
       const char *nx = (const char *)&r->splat[r->isect_idx[j + 8]];
       __builtin_prefetch(nx); __builtin_prefetch(nx + sizeof(mgs_splat) - 1);
@@ -128,10 +128,11 @@ static void render_tile(mgs_raster *r, size_t tile) {
     if (((j - start) & 31) == 31) {
       v16i all = DONE[0];
       for (int yy = 1; yy < nrows; yy++) all &= DONE[yy];
-      if (!v16i_any(~all)) break;
+      if (!v16i_any(~all)) { j++; break; }
     }
   }
   r->tile_evals[tile] = evals;
+  r->tile_visit[2 * tile] = j - start;
   const float *bg = r->s.background;
   for (int y = 0; y < nrows; y++) {
     float t[16], c0[16], c1[16], c2[16], d[16];
@@ -199,6 +200,7 @@ static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camer
   if (g->n > UINT32_MAX - 1)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: %zu Gaussians exceed the 2^32 limit", g->n);
   r->have_forward = 0;
+  r->bwd_kind = 0;
   r->g = g;
   r->cam = *cam;
   r->s = *s;

@@ -75,6 +75,8 @@ struct mgs_raster {
   uint32_t *tile_start;    /* tiles+1 */
   uint32_t *chunk_cnt;     /* per (chunk, tile) counts of the binning */
   uint32_t *tile_evals;    /* tile rows evaluated per tile (statistics) */
+  uint32_t *tile_visit;    /* per tile: intersections the forward visited [2t], the backward [2t+1]
+                              (byte accounting, raster_bytes.c) */
   size_t cap_chunk_cnt;
 
   /* per pixel */
@@ -101,6 +103,9 @@ struct mgs_raster {
   struct mgs_raster_blend_buf *blend;
 
   /* statistics of the last calls (benchmark) */
+  int sort_passes, bin_chunks; /* radix passes run, chunks of the tile count/scatter */
+  int bwd_kind;                /* 0 none, 1 into gradient arrays, 2 into a sink's block scratch */
+  int bwd_alpha, bwd_depth, bwd_mean2d, bwd_visible_only; /* what the last backward was given */
   double evals_fwd, evals_bwd; /* pixel rows (x16) evaluated */
   mgs_raster_profile prof;
 };

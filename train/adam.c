@@ -84,10 +84,97 @@ typedef struct {
   atomic_int bad;     /* bit k: group k had a non-finite value */
 } step_ctx;
 
+/* ---- bfloat16 SH-rest moments (mgs_adam.sh_rest_bf16) ---- */
+static inline uint32_t f2u(float f) { uint32_t u; memcpy(&u, &f, 4); return u; }
+static inline float u2f(uint32_t u) { float f; memcpy(&f, &u, 4); return f; }
+/* lowbias32 (Wellons): 16 random bits for m (low half) and v (high half) of an element */
+static inline uint32_t sr_hash(uint32_t x) {
+  x ^= x >> 16; x *= 0x7feb352dU; x ^= x >> 15; x *= 0x846ca68bU; x ^= x >> 16;
+  return x;
+}
+
+/* As mgs_adam_span on packed words: the step in float from the decoded moments, the
+ * parameter updated with the unrounded ones, the moments stored rounded stochastically
+ * (add 16 random bits below the kept ones, truncate: rounds up with probability equal to
+ * the dropped fraction). */
+static int adam_span_bf16(const mgs_adam_group *c, size_t b, size_t e) {
+  float *restrict P = c->p;
+  uint32_t *restrict MV = (uint32_t *)(void *)c->m;
+  const float *restrict G = c->g;
+  const float b1 = c->b1, b2 = c->b2, ob1 = 1 - c->b1, ob2 = 1 - c->b2;
+  const float ss = c->step_size, isb = c->inv_sqrt_bc2, eps = c->eps;
+  const uint32_t seed = c->seed, base = (uint32_t)c->elem0;
+  int bad = 0;
+  size_t i = b;
+#if defined(__AVX512F__)
+  const __m512 vb1 = _mm512_set1_ps(b1), vb2 = _mm512_set1_ps(b2), vob1 = _mm512_set1_ps(ob1), vob2 = _mm512_set1_ps(ob2);
+  const __m512 vss = _mm512_set1_ps(ss), visb = _mm512_set1_ps(isb), veps = _mm512_set1_ps(eps), zero = _mm512_setzero_ps();
+  const __m512i hi = _mm512_set1_epi32((int)0xFFFF0000u), lo = _mm512_set1_epi32(0xFFFF);
+  const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512i k1 = _mm512_set1_epi32(0x7feb352d), k2 = _mm512_set1_epi32((int)0x846ca68bU);
+  __mmask16 badm = 0;
+  for (; i + 16 <= e; i += 16) {
+    __m512 g = _mm512_loadu_ps(G + i);
+    __m512i w = _mm512_loadu_si512((const void *)(MV + i));
+    __m512 m0 = _mm512_castsi512_ps(_mm512_slli_epi32(w, 16)), v0 = _mm512_castsi512_ps(_mm512_and_si512(w, hi));
+    __m512 m = _mm512_add_ps(_mm512_mul_ps(vb1, m0), _mm512_mul_ps(vob1, g));
+    __m512 v = _mm512_add_ps(_mm512_mul_ps(vb2, v0), _mm512_mul_ps(_mm512_mul_ps(vob2, g), g));
+    __m512 den = _mm512_add_ps(_mm512_mul_ps(_mm512_sqrt_ps(v), visb), veps);
+    __m512 p = _mm512_sub_ps(_mm512_loadu_ps(P + i), _mm512_div_ps(_mm512_mul_ps(vss, m), den));
+    _mm512_storeu_ps(P + i, p);
+    __m512i x = _mm512_add_epi32(_mm512_set1_epi32((int)(base + (uint32_t)i)), lane);
+    x = _mm512_xor_si512(x, _mm512_set1_epi32((int)seed));
+    x = _mm512_xor_si512(x, _mm512_srli_epi32(x, 16)); x = _mm512_mullo_epi32(x, k1);
+    x = _mm512_xor_si512(x, _mm512_srli_epi32(x, 15)); x = _mm512_mullo_epi32(x, k2);
+    x = _mm512_xor_si512(x, _mm512_srli_epi32(x, 16));
+    __m512i mb = _mm512_srli_epi32(_mm512_add_epi32(_mm512_castps_si512(m), _mm512_and_si512(x, lo)), 16);
+    __m512i vb = _mm512_and_si512(_mm512_add_epi32(_mm512_castps_si512(v), _mm512_srli_epi32(x, 16)), hi);
+    _mm512_storeu_si512((void *)(MV + i), _mm512_or_si512(mb, vb));
+    __m512 chk = _mm512_add_ps(_mm512_sub_ps(p, p), _mm512_sub_ps(g, g));
+    badm |= _mm512_cmp_ps_mask(chk, zero, _CMP_NEQ_UQ);
+  }
+  bad = badm != 0;
+#endif
+  for (; i < e; i++) {
+    float g = G[i];
+    uint32_t w = MV[i];
+    float m = b1 * u2f(w << 16) + ob1 * g;
+    float v = b2 * u2f(w & 0xFFFF0000u) + ob2 * g * g;
+    float p = P[i] - ss * m / (sqrtf(v) * isb + eps);
+    P[i] = p;
+    uint32_t x = sr_hash((base + (uint32_t)i) ^ seed);
+    MV[i] = ((f2u(m) + (x & 0xFFFFu)) >> 16) | ((f2u(v) + (x >> 16)) & 0xFFFF0000u);
+    bad |= !isfinite(p) || !isfinite(g);
+  }
+  return bad;
+}
+
+void mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on) {
+  on = on != 0;
+  if (on == a->sh_rest_bf16) return;
+  uint32_t *w = (uint32_t *)(void *)a->m[MGS_PARAM_SH_REST];
+  float *v = a->v[MGS_PARAM_SH_REST];
+  size_t n = a->n * MGS_SH_REST_MAX;
+  for (size_t i = 0; i < n; i++) {
+    if (on) { /* round to nearest even */
+      uint32_t mu = f2u(u2f(w[i])), vu = f2u(v[i]);
+      mu += 0x7FFFu + ((mu >> 16) & 1u);
+      vu += 0x7FFFu + ((vu >> 16) & 1u);
+      w[i] = (mu >> 16) | (vu & 0xFFFF0000u);
+      v[i] = 0;
+    } else {
+      v[i] = u2f(w[i] & 0xFFFF0000u);
+      w[i] = w[i] << 16;
+    }
+  }
+  a->sh_rest_bf16 = on;
+}
+
 /* The element loop is written so the compiler vectorizes it (restrict pointers, constants
  * in locals, the finiteness test as arithmetic). */
 int mgs_adam_span(const mgs_adam_group *c, size_t b, size_t e) {
   float *restrict P = c->p, *restrict M = c->m, *restrict V = c->v;
+  if (c->packed) return adam_span_bf16(c, b, e);
   const float *restrict G = c->g;
   const float b1 = c->b1, b2 = c->b2, ob1 = 1 - c->b1, ob2 = 1 - c->b2;
   const float ss = c->step_size, isb = c->inv_sqrt_bc2, eps = c->eps;
@@ -170,6 +257,10 @@ int mgs_adam_prepare(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *grad, uns
     gp->row = d;
     gp->used = d;
     if (pg == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) gp->used = 3 * (size_t)a->sh_rest_active;
+    if (pg == MGS_PARAM_SH_REST && a->sh_rest_bf16) {
+      gp->packed = 1;
+      gp->seed = sr_hash((uint32_t)a->t[gi] * 0x9E3779B9u);
+    }
     if (gp->used == 0 || model->n == 0) continue;
     gid[n_grp++] = gi;
   }
@@ -213,6 +304,23 @@ mgs_status mgs_adam_step_zero(mgs_adam *a, mgs_gaussians *model, mgs_gaussians *
     }
   }
   return MGS_OK;
+}
+
+void mgs_adam_bytes(const mgs_adam *a, size_t rows, unsigned group_mask, int grad_arrays, int zero_grad,
+                    double *read, double *written) {
+  double fl = 0, packed = 0; /* active floats per row over the selected groups; of them packed */
+  for (int gi = 0; gi < MGS_PARAM_COUNT; gi++) {
+    if (!(group_mask & (1u << gi))) continue;
+    int d = mgs_param_dim((mgs_param_group)gi);
+    /* as mgs_adam_prepare: a partly active SH-rest group steps its first 3*active floats */
+    if (gi == MGS_PARAM_SH_REST && a->sh_rest_active >= 0 && a->sh_rest_active < 15) d = 3 * a->sh_rest_active;
+    fl += d;
+    if (gi == MGS_PARAM_SH_REST && a->sh_rest_bf16) packed = d;
+  }
+  double per = (double)rows * fl * sizeof(float);
+  /* p, m, v (+ g); packed SH-rest moments: one 4-byte word for m and v */
+  *read = 3 * per - (double)rows * packed * sizeof(float) + (grad_arrays ? per : 0);
+  *written = 3 * per - (double)rows * packed * sizeof(float) + (grad_arrays && zero_grad ? per : 0);
 }
 
 mgs_status mgs_adam_report(mgs_param_group group, size_t gaussian, int value, mgs_error *err) {

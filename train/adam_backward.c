@@ -38,6 +38,7 @@ static void adam_sink(void *vctx, size_t first, size_t count, const mgs_gaussian
     mgs_adam_group gp = c->grp[k];
     size_t row = gp.row, off = first * row;
     gp.p += off; gp.m += off; gp.v += off;
+    gp.elem0 = off;
     gp.g = mgs_gaussians_group((mgs_gaussians *)block, (mgs_param_group)c->gid[k]);
     int bad = 0;
     if (c->radii) { /* runs of visible rows */

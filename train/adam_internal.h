@@ -11,6 +11,9 @@ typedef struct mgs_adam_group {
   size_t n_elem;      /* elements (used == row) or rows (partial); mgs_adam_step_zero only */
   size_t unit0;       /* first unit of this group in the global numbering; ditto */
   size_t per_unit;    /* elements or rows per unit; ditto */
+  int packed;         /* m holds bfloat16 (m, v) words (mgs_adam.sh_rest_bf16), v unused */
+  uint32_t seed;      /* packed: this step's rounding seed */
+  size_t elem0;       /* packed: element index of p[0] in the group (the rounding hash's) */
 } mgs_adam_group;
 
 /* One step's constants for every group of group_mask that has something to update

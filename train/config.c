@@ -545,6 +545,7 @@ void mgs_config_train_options(const mgs_train_config *c, mgs_train_options *o) {
   o->vis_tile = c->vis_tile;
   o->sparse_adam = c->adam == MGS_ADAM_AUTO ? -1 : c->adam == MGS_ADAM_SPARSE;
   o->image_cache_mb = (size_t)c->image_cache_mb;
+  o->sh_moments_bf16 = c->sh_moments_bf16;
   o->view_locality = c->view_locality;
 }
 

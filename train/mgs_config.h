@@ -73,6 +73,7 @@ typedef struct mgs_train_config {
   int visibility;
   double vis_tile;
   int adam, image_cache_mb, view_locality;
+  int sh_moments_bf16;
   /* distributed (--mpi) */
   double ghost_margin, mpi_timeout;
   int vdb_resolution, exchange_every, migrate_every, ghosts_average, independent, split_pixels;

@@ -42,6 +42,14 @@ typedef struct mgs_adam {
    * gradient, so their moments are zero and Adam would leave them unchanged; skipping
    * them is exact and saves most of the memory traffic before the SH degree is 3. */
   int sh_rest_active;
+  /* SH-rest moments stored as bfloat16 (set with mgs_adam_set_sh_rest_bf16): m[SH_REST]
+   * then holds one 32-bit word per coefficient, m in the low and v in the high 16 bits,
+   * rounded stochastically (a hash of the element and the step: unbiased, so v's 0.999
+   * decay is not lost to rounding; deterministic); v[SH_REST] is unused. Moves 16 instead
+   * of 24 bytes per SH-rest float a step (45 of the 59 floats a Gaussian). Row operations
+   * (append, compact, copies, checkpoints) carry the words unchanged. Not the reference:
+   * off by default (bench train measures its effect on quality). */
+  int sh_rest_bf16;
 } mgs_adam;
 
 /* Moments for n Gaussians, zero; beta = (0.9, 0.999), eps = 1e-15, lr all zero. */
@@ -51,6 +59,9 @@ void mgs_adam_destroy(mgs_adam *a);
 mgs_status mgs_adam_append(mgs_adam *a, size_t count, mgs_error *err);
 /* Keeps rows with keep[i] != 0, in order (the same mask as mgs_gaussians_compact). */
 void mgs_adam_compact(mgs_adam *a, const uint8_t *keep);
+/* Switches the SH-rest moments to (on != 0) or from bfloat16 storage, converting the
+ * moments held (round to nearest). */
+void mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on);
 /* Zeroes one group's moments (what the reference does when it replaces a tensor). */
 void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group);
 /* One Adam step on every group whose bit is set in group_mask (1 << group).
@@ -89,6 +100,14 @@ mgs_status mgs_adam_step_sparse(mgs_adam *a, mgs_gaussians *model, mgs_gaussians
 mgs_status mgs_adam_step_backward_sparse(mgs_adam *a, mgs_gaussians *model, mgs_raster *r, const float *dL_dcolor,
                                          const float *dL_dalpha, const float *dL_ddepth, float *grad_mean2d,
                                          unsigned group_mask, const int *radii, mgs_error *err);
+/* Bytes one Adam step reads and writes, counted from the layout (train/adam.c): for every
+ * stepped row (rows: model->n for a dense step, the rows with radii > 0 for a sparse one)
+ * and every active float of each group in group_mask, the parameter and its two moments
+ * read and written (24 bytes); the gradient read from gradient arrays when grad_arrays
+ * (and written back as 0 with zero_grad), not counted when it comes from a fused
+ * backward's 64-Gaussian block, which stays in L1. */
+void mgs_adam_bytes(const mgs_adam *a, size_t rows, unsigned group_mask, int grad_arrays, int zero_grad,
+                    double *read, double *written);
 /* The reference's get_expon_lr_func (lr_delay_steps = 0): log-linear from lr_init at
  * step 0 to lr_final at max_steps, constant after. */
 double mgs_expon_lr(int64_t step, double lr_init, double lr_final, int64_t max_steps);
@@ -174,6 +193,7 @@ typedef struct mgs_train_options {
                                 not its content). -1 = yes (default), 0 = keep the input order */
   int sparse_adam;           /* 1: step only the Gaussians the view saw (differs from the
                                 reference); -1 auto: as the visibility's auto decision */
+  int sh_moments_bf16;       /* SH-rest Adam moments as bfloat16 (mgs_adam.sh_rest_bf16) */
   size_t image_cache_mb;     /* > 0: train images streamed through an 8-bit cache of this many
                                 MiB with a prefetch thread (core/mgs_image_cache.h); 0: all
                                 images loaded as floats up front */

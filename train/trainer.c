@@ -71,6 +71,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   if (st != MGS_OK) { mgs_trainer_destroy(t); return st; }
   t->grad = mgs_gaussians_create(init->n, init->sh_degree);
   t->adam = mgs_adam_create(init->n);
+  if (t->adam && o->sh_moments_bf16) mgs_adam_set_sh_rest_bf16(t->adam, 1);
   t->raster = mgs_raster_create();
   t->perm_len = ds->n_views[MGS_SPLIT_TRAIN];
   t->perm = malloc(t->perm_len * sizeof(uint32_t));

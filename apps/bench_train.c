@@ -2,6 +2,7 @@
  * by `morsegs scene --builtin`), plus a run matched to the OpenSplat CPU figures of
  * PEERS.md (200x200, 2000 Gaussians, SH 3, no densification, 1000 iterations).
  * Writes OUT/train.csv, OUT/train.md (tables) and OUT/train.png (PSNR against time). */
+#include <errno.h>
 #include <getopt.h>
 #include <limits.h>
 #include <math.h>
@@ -40,6 +41,46 @@ static void push(samples *ss, const sample *x) {
   ss->s[ss->n++] = *x;
 }
 
+/* Samples back from a train.csv this bench wrote (--from: new --reach targets and plots
+ * without training again). Older files without the cpu_seconds column read as NAN. */
+static mgs_status read_csv(const char *path, samples *ss, mgs_error *err) {
+  FILE *f = fopen(path, "r");
+  if (!f) return mgs_error_set(err, MGS_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
+  char line[1024];
+  int ln = 0;
+  mgs_status st = MGS_OK;
+  while (fgets(line, sizeof line, f)) {
+    ln++;
+    if (ln == 1) {
+      if (strncmp(line, "scene,config,iteration,train_seconds", 36)) {
+        st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a train.csv of morsegs bench train (header)", path);
+        break;
+      }
+      continue;
+    }
+    sample s;
+    memset(&s, 0, sizeof s);
+    s.cpu_seconds = NAN;
+    char *save = NULL, *tok[16];
+    int n = 0;
+    for (char *t = strtok_r(line, ",\n", &save); t && n < 16; t = strtok_r(NULL, ",\n", &save)) tok[n++] = t;
+    if (n < 15) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: %d fields, expected 15 or 16", path, ln, n); break; }
+    snprintf(s.scene, sizeof s.scene, "%s", tok[0]);
+    snprintf(s.config, sizeof s.config, "%s", tok[1]);
+    s.iteration = atoi(tok[2]);
+    s.seconds = atof(tok[3]); s.ms_per_iter = atof(tok[4]); s.cpu_ms_per_iter = atof(tok[5]);
+    s.gaussians = (size_t)strtoull(tok[6], NULL, 10);
+    s.psnr = atof(tok[7]); s.ssim = atof(tok[8]);
+    for (int k = 0; k < MGS_TRAIN_PHASES && 9 + k < 15; k++) s.phase_ms[k] = atof(tok[9 + k]);
+    if (n >= 16) s.cpu_seconds = atof(tok[15]);
+    if (!isfinite(s.psnr) || s.iteration <= 0) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: bad iteration or PSNR", path, ln); break; }
+    push(ss, &s);
+  }
+  fclose(f);
+  if (st == MGS_OK && ss->n == 0) st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: no samples", path);
+  return st;
+}
+
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs bench train [options]\n"
@@ -57,6 +98,7 @@ static void usage(FILE *f) {
     "  --method NAME=ARGS  train NAME as `morsegs train DATA --iters N --seed 1 ARGS` (any train option,\n"
     "                      e.g. sugar='--preset sugar' or 2dgs='--model 2dgs'); repeatable, up to 8;\n"
     "                      replaces the default ADC run\n"
+    "  --from CSV          no training: reach.md, train.md and the plots again from an earlier train.csv\n"
     "  --reach DB,...      time to reach each test PSNR (reach.md; default: per scene the lowest final\n"
     "                      PSNR of its configurations, so every one reaches it)\n");
 }
@@ -243,11 +285,14 @@ static void write_reach(const samples *ss, const double *targets, int n_targets,
   }
 }
 
-static void plot(const samples *ss, const char *path) {
+/* x: the sample's wall seconds, or its CPU seconds (on a shared machine the robust one) */
+static double xval(const sample *s, int cpu) { return cpu ? s->cpu_seconds : s->seconds; }
+
+static void plot(const samples *ss, const char *path, int cpu) {
   const int W = 800, H = 500, L = 70, R = 20, T = 30, B = 50;
   double tmax = 0, pmin = 1e9, pmax = -1e9;
   for (size_t i = 0; i < ss->n; i++) {
-    tmax = fmax(tmax, ss->s[i].seconds);
+    tmax = fmax(tmax, xval(&ss->s[i], cpu));
     pmin = fmin(pmin, ss->s[i].psnr);
     pmax = fmax(pmax, ss->s[i].psnr);
   }
@@ -272,7 +317,7 @@ static void plot(const samples *ss, const char *path) {
     snprintf(buf, sizeof buf, "%.1f", py);
     cairo_move_to(cr, 20, y + 4); cairo_show_text(cr, buf);
   }
-  cairo_move_to(cr, W / 2 - 60, H - 12); cairo_show_text(cr, "training wall time (s)");
+  cairo_move_to(cr, W / 2 - 60, H - 12); cairo_show_text(cr, cpu ? "training CPU time, all threads (s)" : "training wall time (s)");
   cairo_move_to(cr, L, 20); cairo_show_text(cr, "test PSNR (dB) against training time, morsegs bench train");
   static const double col[6][3] = {{0.8, 0.1, 0.1}, {0.1, 0.4, 0.8}, {0.1, 0.6, 0.2}, {0.6, 0.3, 0.7}, {0.9, 0.5, 0.0}, {0.3, 0.3, 0.3}};
   int series = 0;
@@ -283,13 +328,13 @@ static void plot(const samples *ss, const char *path) {
     cairo_set_source_rgb(cr, c[0], c[1], c[2]);
     cairo_set_line_width(cr, 2);
     for (size_t k = i; k < j; k++) {
-      double x = L + (W - L - R) * ss->s[k].seconds / tmax;
+      double x = L + (W - L - R) * xval(&ss->s[k], cpu) / tmax;
       double y = H - B - (H - T - B) * (ss->s[k].psnr - pmin) / (pmax - pmin);
       if (k == i) cairo_move_to(cr, x, y); else cairo_line_to(cr, x, y);
     }
     cairo_stroke(cr);
     for (size_t k = i; k < j; k++) {
-      double x = L + (W - L - R) * ss->s[k].seconds / tmax;
+      double x = L + (W - L - R) * xval(&ss->s[k], cpu) / tmax;
       double y = H - B - (H - T - B) * (ss->s[k].psnr - pmin) / (pmax - pmin);
       cairo_arc(cr, x, y, 3, 0, 2 * MGS_PI);
       cairo_fill(cr);
@@ -312,10 +357,11 @@ int mgs_bench_train(int argc, char **argv) {
                                        {"no-densify", no_argument, 0, 'D'}, {"work", required_argument, 0, 'w'},
                                        {"output", required_argument, 0, 'o'}, {"threads", required_argument, 0, 't'},
                                        {"method", required_argument, 0, 'm'}, {"reach", required_argument, 0, 'T'},
+                                       {"from", required_argument, 0, 'f'},
                                        {"help", no_argument, 0, 'h'},
                                        {0, 0, 0, 0}};
   int full = 0, iters = 0, res = 200, peer = 1, threads = 0, random_n = 0, densify = 1, c;
-  const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train", *methods[8];
+  const char *scenes = NULL, *work = "/tmp/mgs-bench-train", *out = "bench/train", *methods[8], *from = NULL;
   int n_methods = 0, n_targets = 0;
   double targets[16];
   optind = 1;
@@ -340,6 +386,7 @@ int mgs_bench_train(int argc, char **argv) {
         methods[n_methods++] = optarg;
         break;
       }
+      case 'f': from = optarg; break;
       case 'T': {
         n_targets = 0;
         for (const char *p = optarg; *p && n_targets < 16;) {
@@ -364,7 +411,7 @@ int mgs_bench_train(int argc, char **argv) {
   mgs_log_set_level(MGS_LOG_WARN);
   mgs_error err;
   mgs_error_clear(&err);
-  if (mgs_mkdir_p(work, &err) || mgs_mkdir_p(out, &err)) return mgs_cli_fail("bench train", &err);
+  if ((!from && mgs_mkdir_p(work, &err)) || mgs_mkdir_p(out, &err)) return mgs_cli_fail("bench train", &err);
   /* Evaluated as the reference does: at iteration N, the model before N's densification
      and opacity reset (mgs_trainer_run_to), so reset iterations need no detour. */
   static const int evals[] = {100, 250, 500, 1000, 1500, 2000, 2500, 3000, 3500, 4000, 5000, 6000, 6500, 7000,
@@ -374,8 +421,13 @@ int mgs_bench_train(int argc, char **argv) {
   for (int e = 0; e < n_evals; e++) if (evals[e] < iters) my_evals[nm++] = evals[e];
   my_evals[nm++] = iters;
   samples ss = {0};
+  if (from) {
+    if (mgs_mkdir_p(out, &err) || read_csv(from, &ss, &err)) { free(ss.s); return mgs_cli_fail("bench train", &err); }
+    peer = 0;
+    scenes = "";
+  }
   char *list = mgs_strdup(scenes);
-  printf("morsegs bench train: %d iterations at %dx%d, %d threads\n", iters, res, res, mgs_parallel_max_threads());
+  if (!from) printf("morsegs bench train: %d iterations at %dx%d, %d threads\n", iters, res, res, mgs_parallel_max_threads());
   char *lsave = NULL;
   mgs_status st = MGS_OK;
   for (char *tok = strtok_r(list, ",", &lsave); tok && st == MGS_OK; tok = strtok_r(NULL, ",", &lsave)) {
@@ -433,8 +485,11 @@ int mgs_bench_train(int argc, char **argv) {
     fclose(f);
   }
   snprintf(path, sizeof path, "%s/train.png", out);
-  plot(&ss, path);
-  printf("wrote %s/train.csv, %s/train.md, %s/reach.md (time to reach a test PSNR), %s/train.png\n", out, out, out, out);
+  plot(&ss, path, 0);
+  snprintf(path, sizeof path, "%s/train_cpu.png", out);
+  plot(&ss, path, 1);
+  printf("wrote %s/train.csv, %s/train.md, %s/reach.md (time to reach a test PSNR), %s/train.png and train_cpu.png (PSNR "
+         "against wall and CPU time)\n", out, out, out, out);
   free(ss.s);
   return 0;
 }

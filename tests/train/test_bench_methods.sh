@@ -27,6 +27,13 @@ for cfg in 3dgs surfels; do
     END { if (!done || wall > hi + 0.05 || wall < lo - 0.05) { print "FAIL: reach wall " wall " not in [" lo ", " hi "]"; exit 1 } }' \
     methods/train.csv || exit 1
 done
+# --from: the same time-to-quality table again from the CSV, without training
+"$cli" bench train --from methods/train.csv -o again > again.log 2>&1
+cmp methods/reach.md again/reach.md || { diff methods/reach.md again/reach.md; echo "FAIL: --from gives another reach.md" >&2; exit 1; }
+[ -s again/train_cpu.png ] || { echo "FAIL: no CPU-time plot" >&2; exit 1; }
+echo "not,a,csv" > bad.csv
+if "$cli" bench train --from bad.csv -o bad4 > bad4.log 2>&1; then echo "FAIL: a bad CSV passed" >&2; exit 1; fi
+grep -q "bad.csv: not a train.csv" bad4.log || { cat bad4.log; exit 1; }
 "$cli" "${common[@]}" -o reach --method "3dgs=" --reach 99 > reach.log 2>&1
 grep -q "| sphere | 3dgs | 99.00 | not reached by 120" reach/reach.md || { cat reach/reach.md; echo "FAIL: 99 dB reported reached" >&2; exit 1; }
 if "$cli" "${common[@]}" -o bad --reach 30,abc > bad3.log 2>&1; then echo "FAIL: a bad --reach passed" >&2; exit 1; fi

@@ -250,14 +250,19 @@ class QuadField {
             for (int k = -1; k <= 1; k++) v_[n++] = buf[o + i + j + k];
       } else {
         const Coord &o = nb_.origin();
-        for (int i = -1; i <= 1; i++)
-          for (int j = -1; j <= 1; j++)
-            for (int k = -1; k <= 1; k++) {
-              const int x = c[0] - o[0] + i, y = c[1] - o[1] + j, z = c[2] - o[2] + k;
-              leaf = nb_.leaf(LeafNbhd<FloatTree>::index(x, y, z));
+        int li[3][3], lo[3][3];  // per axis and step: the leaf's index term and the offset term
+        for (int a = 0; a < 3; a++)
+          for (int s = 0; s < 3; s++) {
+            const int x = c[a] - o[a] + s - 1;
+            li[a][s] = ((x >> 3) + 1) * (a == 0 ? 9 : a == 1 ? 3 : 1);
+            lo[a][s] = (x & 7) << (a == 0 ? 6 : a == 1 ? 3 : 0);
+          }
+        for (int i = 0; i < 3; i++)
+          for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++) {
+              const float *buf = data(li[0][i] + li[1][j] + li[2][k]);
               // no leaf: a tile's value or the background
-              v_[n++] = leaf ? leaf->buffer().data()[LeafNbhd<FloatTree>::offset(x, y, z)]
-                             : nb_.accessor().getValue(c.offsetBy(i, j, k));
+              v_[n++] = buf ? buf[lo[0][i] | lo[1][j] | lo[2][k]] : nb_.accessor().getValue(c.offsetBy(i - 1, j - 1, k - 1));
             }
       }
       c_ = c;
@@ -286,7 +291,25 @@ class QuadField {
   float tau() const { return tau_; }
 
  private:
+  // The values of leaf k of the neighbourhood (null: no leaf), looked up once per origin.
+  const float *data(int k) {
+    if (data_origin_ != nb_.origin() || !have_data_) {
+      data_origin_ = nb_.origin();
+      have_data_ = true;
+      data_known_ = 0;
+    }
+    if (!(data_known_ >> k & 1)) {
+      const FloatTree::LeafNodeType *l = nb_.leaf(k);
+      data_[k] = l ? l->buffer().data() : nullptr;
+      data_known_ |= 1u << k;
+    }
+    return data_[k];
+  }
   LeafNbhd<FloatTree> nb_;
+  const float *data_[27];
+  uint32_t data_known_ = 0;
+  Coord data_origin_;
+  bool have_data_ = false;
   float tau_;
   Coord c_;
   bool have_ = false;

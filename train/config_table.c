@@ -185,7 +185,7 @@ static const mgs_option TABLE[] = {
    MGS_GROUP_MORSE, REC, "R: voxels along the diagonal", NOT_DIST},
   {"morse-tau", "morse_tau", MGS_OPT_DOUBLE, F(morse_tau), "0.5", 1e-3, 0.999, NULL, NULL, MGS_GROUP_MORSE, REC,
    "the surface {A = tau}", NOT_DIST},
-  {"morse-sdf", "morse_sdf", MGS_OPT_ENUM, F(morse_sdf), "sweep", 0, 0, "mesh|sweep|closest", NULL, MGS_GROUP_MORSE,
+  {"morse-sdf", "morse_sdf", MGS_OPT_ENUM, F(morse_sdf), "closest", 0, 0, "mesh|sweep|closest", NULL, MGS_GROUP_MORSE,
    REC, "SDF construction of the analyses", NOT_DIST},
   {"gap-max", "gap_max", MGS_OPT_DOUBLE, F(gap_max), "0.05", 1e-6, 0.5, NULL, NULL, MGS_GROUP_MORSE, REC,
    "gaps: largest hole radius filled", NOT_DIST},

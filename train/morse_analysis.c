@@ -25,7 +25,7 @@ void mgs_morse_options_default(mgs_morse_options *o) {
   o->eps_p = 0.01;
   o->eps_sig = 0.02;
   o->min_alpha = 1.0 / 255.0;
-  o->sdf_method = MGS_VDB_SDF_SWEEP;
+  o->sdf_method = MGS_VDB_SDF_CLOSEST;
   o->spawn = MGS_MORSE_SPAWN_NONE;
   o->prune = MGS_MORSE_PRUNE_NONE;
   o->max_spawn = 1000;

@@ -198,25 +198,72 @@ inline bool interior(const Coord &c) {
   return ((c[0] + 7) & 7) < 6 && ((c[1] + 7) & 7) < 6 && ((c[2] + 7) & 7) < 6;
 }
 
+// The leaves of a tree around one leaf (index 9 (dx + 1) + 3 (dy + 1) + dz + 1 for the leaf
+// dx, dy, dz leaves away; null where there is none), each looked up once: reads at ±1 voxel of
+// a leaf go straight to the buffers (through the accessor, 58 % of voxels touch a leaf face and
+// each read of a neighbour went through its hash of cached nodes: 8 % of the SDF's time).
+template <class TreeT> class LeafNbhd {
+ public:
+  using Leaf = typename TreeT::LeafNodeType;
+  explicit LeafNbhd(const TreeT &t) : acc_(t) {}
+  // Forget the leaves unless `o` (a leaf origin) is the one they are around.
+  void at(const Coord &o) {
+    if (known_ && o == o_) return;
+    o_ = o;
+    known_ = 0;
+  }
+  const Coord &origin() const { return o_; }
+  // Index of the leaf holding the voxel at local (x, y, z) from the origin, each in [-8, 15].
+  static int index(int x, int y, int z) { return 9 * ((x >> 3) + 1) + 3 * ((y >> 3) + 1) + (z >> 3) + 1; }
+  static int offset(int x, int y, int z) { return ((x & 7) << 6) | ((y & 7) << 3) | (z & 7); }
+  const Leaf *leaf(int k) {
+    if (!(known_ >> k & 1)) {
+      nb_[k] = acc_.probeConstLeaf(o_.offsetBy((k / 9 - 1) * 8, (k / 3 % 3 - 1) * 8, (k % 3 - 1) * 8));
+      known_ |= 1u << k;
+    }
+    return nb_[k];
+  }
+  tree::ValueAccessor<const TreeT> &accessor() { return acc_; }
+
+ private:
+  tree::ValueAccessor<const TreeT> acc_;
+  Coord o_;
+  uint32_t known_ = 0;
+  const Leaf *nb_[27];
+};
+
 class QuadField {
  public:
-  QuadField(const FloatTree &t, float tau) : acc_(t), tau_(tau) {}
+  QuadField(const FloatTree &t, float tau) : nb_(t), tau_(tau) {}
   // f = A(p) - τ, g = ∇A(p) (per voxel).
   double eval(const Vec3d &p, Vec3d &g) {
     const Coord c((Int32)std::floor(p[0] + 0.5), (Int32)std::floor(p[1] + 0.5), (Int32)std::floor(p[2] + 0.5));
     if (!have_ || c != c_) {
       int n = 0;
+      nb_.at(Coord(c[0] & ~7, c[1] & ~7, c[2] & ~7));
       const FloatTree::LeafNodeType *leaf;
-      if (interior(c) && (leaf = acc_.probeConstLeaf(c))) {  // all 27 in one leaf (42 %)
+      if (interior(c) && (leaf = nb_.leaf(13))) {  // all 27 in one leaf (42 %)
         const float *buf = leaf->buffer().data();
         const int o = (int)FloatTree::LeafNodeType::coordToOffset(c);
         for (int i = -64; i <= 64; i += 64)
           for (int j = -8; j <= 8; j += 8)
             for (int k = -1; k <= 1; k++) v_[n++] = buf[o + i + j + k];
       } else {
-        for (int i = -1; i <= 1; i++)
-          for (int j = -1; j <= 1; j++)
-            for (int k = -1; k <= 1; k++) v_[n++] = acc_.getValue(c.offsetBy(i, j, k));
+        const Coord &o = nb_.origin();
+        int li[3][3], lo[3][3];  // per axis and step: the leaf's index term and the offset term
+        for (int a = 0; a < 3; a++)
+          for (int s = 0; s < 3; s++) {
+            const int x = c[a] - o[a] + s - 1;
+            li[a][s] = ((x >> 3) + 1) * (a == 0 ? 9 : a == 1 ? 3 : 1);
+            lo[a][s] = (x & 7) << (a == 0 ? 6 : a == 1 ? 3 : 0);
+          }
+        for (int i = 0; i < 3; i++)
+          for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++) {
+              const float *buf = data(li[0][i] + li[1][j] + li[2][k]);
+              // no leaf: a tile's value or the background
+              v_[n++] = buf ? buf[lo[0][i] | lo[1][j] | lo[2][k]] : nb_.accessor().getValue(c.offsetBy(i - 1, j - 1, k - 1));
+            }
       }
       c_ = c;
       have_ = true;
@@ -241,11 +288,28 @@ class QuadField {
     g = Vec3d(gx, gy, gz);
     return f - tau_;
   }
-  float value(const Coord &c) { return acc_.getValue(c); }
   float tau() const { return tau_; }
 
  private:
-  tree::ValueAccessor<const FloatTree> acc_;
+  // The values of leaf k of the neighbourhood (null: no leaf), looked up once per origin.
+  const float *data(int k) {
+    if (data_origin_ != nb_.origin() || !have_data_) {
+      data_origin_ = nb_.origin();
+      have_data_ = true;
+      data_known_ = 0;
+    }
+    if (!(data_known_ >> k & 1)) {
+      const FloatTree::LeafNodeType *l = nb_.leaf(k);
+      data_[k] = l ? l->buffer().data() : nullptr;
+      data_known_ |= 1u << k;
+    }
+    return data_[k];
+  }
+  LeafNbhd<FloatTree> nb_;
+  const float *data_[27];
+  uint32_t data_known_ = 0;
+  Coord data_origin_;
+  bool have_data_ = false;
   float tau_;
   Coord c_;
   bool have_ = false;
@@ -419,8 +483,10 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
     ring.voxelizeActiveTiles();
     for_each_on(ring, [&](const MaskTree::LeafNodeType &ml) {
       QuadField q(at, tau);
-      tree::ValueAccessor<const MaskTree> pa(*prev);
-      tree::ValueAccessor<const Vec3STree> ca(cp);
+      LeafNbhd<MaskTree> pa(*prev);
+      LeafNbhd<Vec3STree> ca(cp);
+      pa.at(ml.origin());
+      ca.at(ml.origin());
       tree::ValueAccessor<const MaskTree> in(inside);
       auto *dl = dist.probeLeaf(ml.origin());
       auto *cl = cp.probeLeaf(ml.origin());
@@ -430,37 +496,27 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
         const Vec3d x = c.asVec3d();
         double best = INFINITY;
         Vec3d bp;
-        const MaskTree::LeafNodeType *pl;
-        const Vec3STree::LeafNodeType *cpl;
-        if (interior(c) && (pl = pa.probeConstLeaf(c)) && (cpl = ca.probeConstLeaf(c))) {
-          const int o = (int)v.pos();
-          for (int i = -1; i <= 1; i++)
-            for (int j = -1; j <= 1; j++)
-              for (int l = -1; l <= 1; l++) {
-                const int on = o + 64 * i + 8 * j + l;
-                if (!pl->isValueOn(on)) continue;
-                const Vec3d p = x + Vec3d(i, j, l) + Vec3d(cpl->getValue(on));
-                const double d2 = (p - x).lengthSqr();
-                if (d2 < best) best = d2, bp = p;  // (false for NaN: no closest point)
-              }
-        } else {
-          for (int i = -1; i <= 1; i++)
-            for (int j = -1; j <= 1; j++)
-              for (int l = -1; l <= 1; l++) {
-                const Coord n = c.offsetBy(i, j, l);
-                if (!pa.isValueOn(n)) continue;
-                const Vec3d p = n.asVec3d() + Vec3d(ca.getValue(n));
-                const double d2 = (p - x).lengthSqr();
-                if (d2 < best) best = d2, bp = p;
-              }
-        }
+        const int o = (int)v.pos(), lx = o >> 6, ly = (o >> 3) & 7, lz = o & 7;
+        for (int i = -1; i <= 1; i++)
+          for (int j = -1; j <= 1; j++)
+            for (int l = -1; l <= 1; l++) {
+              const int k = LeafNbhd<MaskTree>::index(lx + i, ly + j, lz + l);
+              const int on = LeafNbhd<MaskTree>::offset(lx + i, ly + j, lz + l);
+              const auto *pl = pa.leaf(k);
+              if (!pl || !pl->isValueOn(on)) continue;
+              const auto *cpl = ca.leaf(k);
+              if (!cpl) continue;
+              const Vec3d p = x + Vec3d(i, j, l) + Vec3d(cpl->getValue(on));
+              const double d2 = (p - x).lengthSqr();
+              if (d2 < best) best = d2, bp = p;  // (false for NaN: no closest point)
+            }
         if (!std::isfinite(best)) {  // (not met: every seed hands on a point) chamfer step
           double dc = INFINITY;
           for (int i = -1; i <= 1; i++)
             for (int j = -1; j <= 1; j++)
               for (int l = -1; l <= 1; l++) {
                 const Coord n = c.offsetBy(i, j, l);
-                if (pa.isValueOn(n)) dc = std::min(dc, std::fabs((double)dist.getValue(n)) + std::sqrt(double(i * i + j * j + l * l)));
+                if (prev->isValueOn(n)) dc = std::min(dc, std::fabs((double)dist.getValue(n)) + std::sqrt(double(i * i + j * j + l * l)));
               }
           cl->setValueOnly(v.pos(), Vec3s(std::numeric_limits<float>::quiet_NaN()));
           dl->setValueOnly(v.pos(), (float)(in.isValueOn(c) ? -dc : dc));
@@ -497,66 +553,117 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   size_t sweeps = 0, moved = 0, grown = 0;
   const double eps = 1e-4;  // voxels: float rounding of the stored points
   const double lsteps[4] = {0, 1, std::sqrt(2.0), std::sqrt(3.0)};
+  const float lstepsf[4] = {0, 1, (float)std::sqrt(2.0), (float)std::sqrt(3.0)};
   // Sweeps over `work` (a mask inside the band) until nothing changes; every voxel that
   // changed is added to `touched`.
   auto relax = [&](std::unique_ptr<MaskTree> work, MaskTree &touched) {
   while (work->activeVoxelCount() > 0) {
     sweeps++;
-    Vec3STree next(*work, Vec3s(0.0f), TopologyCopy());
+    // the new points of the voxels that change, per leaf (few: no tree the band's size)
+    struct Moves {
+      Coord origin;
+      std::vector<std::pair<Index, Vec3s>> v;
+    };
+    std::vector<Moves> moves;
+    std::mutex mu;
     MaskTree changed(*work);
     for_each_on(changed, [&](MaskTree::LeafNodeType &ml) {
       QuadField q(at, tau);
       tree::ValueAccessor<const Vec3STree> ca(cp);
-      auto *nl = next.probeLeaf(ml.origin());
+      tree::ValueAccessor<const FloatTree> da(dist);
       const Vec3STree::LeafNodeType *cl = ca.probeConstLeaf(ml.origin());
-      if (!nl || !cl) return;
+      if (!cl) return;
       // the 27 leaves around this one, looked up once (most voxels touch a leaf face)
       const Vec3STree::LeafNodeType *nb[27];
-      for (int k = 0; k < 27; k++)
-        nb[k] = ca.probeConstLeaf(ml.origin().offsetBy((k / 9 - 1) * 8, (k / 3 % 3 - 1) * 8, (k % 3 - 1) * 8));
-      for (auto v = ml.getValueMask().beginOn(); v; ++v) {
-        const Coord c = ml.offsetToGlobalCoord(v.pos());
-        const Vec3d own(cl->getValue(v.pos()));
-        const double d0 = std::isfinite(own.lengthSqr()) ? own.length() : INFINITY;
-        double best = d0 * d0;
-        bool broken = false;
-        Vec3d bo;
-        const int o = (int)v.pos(), lx = o >> 6, ly = (o >> 3) & 7, lz = o & 7;
-        for (int i = -1; i <= 1; i++)
-          for (int j = -1; j <= 1; j++)
-            for (int l = -1; l <= 1; l++) {
-              const int x = lx + i, y = ly + j, z = lz + l;
-              const auto *leaf = nb[9 * ((x >> 3) + 1) + 3 * ((y >> 3) + 1) + (z >> 3) + 1];
-              const int on = ((x & 7) << 6) | ((y & 7) << 3) | (z & 7);
-              if (!leaf || !leaf->isValueOn(on)) continue;
-              const Vec3s pn = leaf->getValue(on);
-              const Vec3d off = Vec3d(i, j, l) + Vec3d(pn);
-              const double d2 = off.lengthSqr();
-              if (d2 < best) best = d2, bo = off;  // (false for NaN)
-              if (d0 > Vec3d(pn).length() + lsteps[(i != 0) + (j != 0) + (l != 0)] + eps) broken = true;
+      const FloatTree::LeafNodeType *nd[27];
+      for (int k = 0; k < 27; k++) {
+        const Coord o = ml.origin().offsetBy((k / 9 - 1) * 8, (k / 3 % 3 - 1) * 8, (k % 3 - 1) * 8);
+        nb[k] = ca.probeConstLeaf(o);
+        nd[k] = nb[k] ? da.probeConstLeaf(o) : nullptr;
+      }
+      // Most voxels meet the bound. Find those that may not from the stored |d| (float, no
+      // square root; +inf off the band) of the leaf and its one-voxel rim, over 8 voxels of
+      // a row at a time, and test only them exactly on the points below. |d| and the length
+      // of the stored point differ by float rounding, < 1e-6 (1 + |d|) voxel, so the filter,
+      // with that much less slack, passes every voxel the exact test breaks.
+      float pad[10][10][10];
+      for (int x = -1; x <= 8; x++)
+        for (int y = -1; y <= 8; y++)
+          for (int z = -1; z <= 8; z++) {
+            const int k = 9 * ((x >> 3) + 1) + 3 * ((y >> 3) + 1) + (z >> 3) + 1;
+            const int on = ((x & 7) << 6) | ((y & 7) << 3) | (z & 7);
+            pad[x + 1][y + 1][z + 1] = nd[k] && nb[k]->isValueOn(on) ? std::fabs(nd[k]->getValue(on)) : INFINITY;
+          }
+      const auto &mask = ml.getValueMask();
+      std::vector<std::pair<Index, Vec3s>> mine;
+      for (int lx = 0; lx < 8; lx++)
+        for (int ly = 0; ly < 8; ly++) {
+          const Index row = (Index)(lx << 6 | ly << 3);
+          if (!(mask.getWord<uint8_t>(row >> 3))) continue;
+          float m[8];
+          for (int z = 0; z < 8; z++) m[z] = INFINITY;
+          for (int i = -1; i <= 1; i++)
+            for (int j = -1; j <= 1; j++)
+              for (int l = -1; l <= 1; l++) {
+                if (!i && !j && !l) continue;
+                const float st = lstepsf[(i != 0) + (j != 0) + (l != 0)];
+                const float *r = &pad[lx + 1 + i][ly + 1 + j][1 + l];
+                for (int z = 0; z < 8; z++) m[z] = std::min(m[z], r[z] + st);
+              }
+          for (int lz = 0; lz < 8; lz++) {
+            const Index o = row | (Index)lz;
+            if (!mask.isOn(o)) continue;
+            const Vec3d own(cl->getValue(o));
+            const bool finite = std::isfinite(own.lengthSqr());
+            const float d0f = pad[lx + 1][ly + 1][lz + 1];
+            if (finite && !(d0f > m[lz] + (float)eps - 1e-6f * (1 + d0f))) {
+              ml.setValueOff(o);
+              continue;
             }
-        if (!broken) {
-          ml.setValueOff(v.pos());
-          continue;
+            const double d0 = finite ? own.length() : INFINITY;
+            double best = d0 * d0;
+            bool broken = false;
+            Vec3d bo;
+            for (int i = -1; i <= 1; i++)
+              for (int j = -1; j <= 1; j++)
+                for (int l = -1; l <= 1; l++) {
+                  const int x = lx + i, y = ly + j, z = lz + l;
+                  const auto *leaf = nb[9 * ((x >> 3) + 1) + 3 * ((y >> 3) + 1) + (z >> 3) + 1];
+                  const int on = ((x & 7) << 6) | ((y & 7) << 3) | (z & 7);
+                  if (!leaf || !leaf->isValueOn(on)) continue;
+                  const Vec3s pn = leaf->getValue(on);
+                  const Vec3d off = Vec3d(i, j, l) + Vec3d(pn);
+                  const double d2 = off.lengthSqr();
+                  if (d2 < best) best = d2, bo = off;  // (false for NaN)
+                  if (d0 > Vec3d(pn).length() + lsteps[(i != 0) + (j != 0) + (l != 0)] + eps) broken = true;
+                }
+            if (!broken) {
+              ml.setValueOff(o);
+              continue;
+            }
+            const double d = std::sqrt(best);
+            const Vec3d x = ml.offsetToGlobalCoord(o).asVec3d();
+            Vec3d p = x + bo;
+            if (closest_point(q, x, p, 3) && (p - x).length() < d) bo = p - x;
+            mine.emplace_back(o, Vec3s(bo));
+          }
         }
-        const double d = std::sqrt(best);
-        const Vec3d x = c.asVec3d();
-        Vec3d p = x + bo;
-        if (closest_point(q, x, p, 3) && (p - x).length() < d) bo = p - x;
-        nl->setValueOnly(v.pos(), Vec3s(bo));
+      if (!mine.empty()) {
+        std::lock_guard<std::mutex> lk(mu);
+        moves.push_back(Moves{ml.origin(), std::move(mine)});
       }
     });
     tools::pruneInactive(changed);
-    for_each_on(changed, [&](const MaskTree::LeafNodeType &ml) {
+    mgs_vdb_detail::parallel_for(0, moves.size(), 16, [&](size_t b, size_t e) {
       tree::ValueAccessor<const MaskTree> in(inside);
-      const auto *nl = next.probeConstLeaf(ml.origin());
-      auto *cl = cp.probeLeaf(ml.origin());
-      auto *dl = dist.probeLeaf(ml.origin());
-      for (auto v = ml.getValueMask().beginOn(); v; ++v) {
-        const Vec3s off = nl->getValue(v.pos());
-        const double d = Vec3d(off).length();
-        cl->setValueOnly(v.pos(), off);
-        dl->setValueOnly(v.pos(), (float)(in.isValueOn(ml.offsetToGlobalCoord(v.pos())) ? -d : d));
+      for (size_t k = b; k < e; k++) {
+        auto *cl = cp.probeLeaf(moves[k].origin);
+        auto *dl = dist.probeLeaf(moves[k].origin);
+        for (const auto &mv : moves[k].v) {
+          const double d = Vec3d(mv.second).length();
+          cl->setValueOnly(mv.first, mv.second);
+          dl->setValueOnly(mv.first, (float)(in.isValueOn(cl->offsetToGlobalCoord(mv.first)) ? -d : d));
+        }
       }
     });
     moved += changed.activeVoxelCount();

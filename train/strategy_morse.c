@@ -269,16 +269,7 @@ static mgs_status prune_floaters(mgs_morse_ctx *c, const mgs_gaussians *g, uint8
     size_t *idx = NULL, *idx0 = NULL, n = 0, n0 = 0;
     int32_t zero = 0;
     if (nf) st = mgs_topo_gaussians_touching(c->comp, ids, nf, c->sub, 3.0, &idx, &n, err);
-    /* only the Gaussians touching a floater need the second test (the test of one Gaussian
-       reads nothing of the others): the same answers on n rows instead of the whole model,
-       whose Gaussians inside the largest component each scanned their 3σ voxels */
-    if (nf && st == MGS_OK && n) {
-      mgs_gaussians *cand = mgs_gaussians_select(c->sub, idx, n);
-      if (!cand) st = mgs_error_set(err, MGS_ERR_NOMEM, "morse: out of memory (prune)");
-      if (st == MGS_OK) st = mgs_topo_gaussians_touching(c->comp, &zero, 1, cand, 3.0, &idx0, &n0, err);
-      for (size_t b = 0; st == MGS_OK && b < n0; b++) idx0[b] = idx[idx0[b]]; /* still ascending */
-      mgs_gaussians_destroy(cand);
-    }
+    if (nf && st == MGS_OK) st = mgs_topo_gaussians_touching(c->comp, &zero, 1, c->sub, 3.0, &idx0, &n0, err);
     /* both lists ascending: drop those also touching the largest component */
     for (size_t a = 0, b = 0; st == MGS_OK && a < n; a++) {
       while (b < n0 && idx0[b] < idx[a]) b++;

@@ -132,8 +132,8 @@ static void test_components(void) {
   CHECK_OK(mgs_topo_gaussians_touching(c, both, 2, g, 1.0, &idx, &n, &e), &e);
   CHECK(n == 3 && idx[0] == 0 && idx[1] == 4 && idx[2] == 5);
   free(idx);
-  /* one Gaussian's answer reads nothing of the others (MorseGS's floater pruning asks the
-     second question on the first answer's rows only): every subset of rows, asked as a
+  /* one Gaussian's answer reads nothing of the others (so a caller may ask only some
+     rows, e.g. the first answer's): every subset of rows, asked as a
      model of its own, gets the full model's answers for those rows */
   for (int k3 = 0; k3 < 2; k3++) {
     int32_t big = 0, *q = k3 ? both : &big;

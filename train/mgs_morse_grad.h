@@ -116,6 +116,13 @@ mgs_status mgs_morse_closest_point(const mgs_gaussians *g, const mgs_morse_index
 mgs_status mgs_morse_sdf_point_grad(const mgs_gaussians *g, const double c[3], float tau,
                                     double weight, mgs_gaussians *grad, double *alpha_out,
                                     mgs_error *err);
+/* The same derivative in one pass, for callers that learn the weight only after the
+ * value: writes ∂A(c)/∂θ into unit (g's n rows; mean, log_scale, rot and opacity of EVERY
+ * row overwritten, 0 where the support does not reach c) and *den_out = the normal length
+ * the derivative divides by (|∇A(c)|, or its floor as above). weight · ∂d/∂θ is then
+ * (−weight / den) · unit: what mgs_morse_sdf_point_grad adds, up to one float rounding. */
+mgs_status mgs_morse_sdf_point_unit_grad(const mgs_gaussians *g, const double c[3], float tau, mgs_gaussians *unit,
+                                         mgs_morse_point *pt, double *den_out, mgs_error *err);
 /* The same through an index built from g (MGS_ERR_ARG if its count differs); *pt (may be
  * NULL) receives A, ∇A, the contributor count and the floor flag. */
 mgs_status mgs_morse_sdf_point_grad_ix(const mgs_gaussians *g, const mgs_morse_index *ix,

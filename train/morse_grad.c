@@ -596,6 +596,47 @@ mgs_status mgs_morse_sdf_point_grad(const mgs_gaussians *g, const double c[3], f
   return st;
 }
 
+/* One pass: each candidate's support test and local frame are computed once, A, ∇A and
+   σ_min summed, and ∂A/∂θ written (acc_grad's expressions at s = 1) into unit's row. */
+mgs_status mgs_morse_sdf_point_unit_grad(const mgs_gaussians *g, const double c[3], float tau, mgs_gaussians *unit,
+                                         mgs_morse_point *pt, double *den_out, mgs_error *err) {
+  mgs_morse_field_params p;
+  mgs_morse_field_params_default(&p);
+  if (!g || !unit || unit->n != g->n)
+    return mgs_error_set(err, MGS_ERR_ARG, "morse sdf unit gradient: gradient model has %zu rows, model %zu",
+                         unit ? unit->n : 0, g ? g->n : 0);
+  if (!(tau > 0)) return mgs_error_set(err, MGS_ERR_ARG, "morse sdf gradient: tau %g must be positive", (double)tau);
+  if (!isfinite(c[0]) || !isfinite(c[1]) || !isfinite(c[2]))
+    return mgs_error_set(err, MGS_ERR_NUMERIC, "morse sdf gradient: non-finite point or weight");
+  double A = 0, gA[3] = {0, 0, 0}, sigma_min = INFINITY;
+  int count = 0;
+  grad_acc acc = {unit, 1.0};
+  eval1 e;
+  for (size_t i = 0; i < g->n; i++) {
+    unit->opacity[i] = 0;
+    for (int k = 0; k < 3; k++) unit->mean[3 * i + k] = unit->log_scale[3 * i + k] = 0;
+    for (int k = 0; k < 4; k++) unit->rot[4 * i + k] = 0;
+    if (!eval_one(g, i, &p, c, &e)) continue;
+    A += e.G;
+    for (int a = 0; a < 3; a++) gA[a] -= e.G * e.Pd[a];
+    double vmax = fmax(e.v[0], fmax(e.v[1], e.v[2]));
+    sigma_min = fmin(sigma_min, sqrt(vmax));
+    count++;
+    acc_grad(&acc, &e, i);
+  }
+  mgs_morse_point r;
+  memset(&r, 0, sizeof r);
+  r.alpha = A;
+  for (int a = 0; a < 3; a++) r.grad[a] = gA[a];
+  r.grad_norm = norm3(gA);
+  r.contributors = count;
+  double floor_g = 1e-3 * tau / sigma_min, den = r.grad_norm;
+  if (count > 0 && !(den >= floor_g)) { den = floor_g; r.floored = 1; }
+  if (pt) *pt = r;
+  if (den_out) *den_out = den;
+  return MGS_OK;
+}
+
 mgs_status mgs_morse_sdf_point_grad_ix(const mgs_gaussians *g, const mgs_morse_index *ix, const double c[3], float tau,
                                        double weight, mgs_gaussians *grad, mgs_morse_point *pt, mgs_error *err) {
   mgs_morse_field_params p;

@@ -102,27 +102,43 @@ typedef struct end_job {
   topo_term *t;
   float tau;
   double *aval;          /* out: A at each end's c */
-  const double *weight;  /* grad pass: beta * dL/d(end) */
+  double *den;           /* out: the normal length each end's derivative divides by */
+  const double *weight;  /* scale pass: beta * dL/d(end) */
   mgs_status *st;
 } end_job;
 
+/* One pass per end: A(c) and ∂A(c)/∂θ of its candidates (into locg); the loss' weight of
+   an end depends on every end's value, so the gradient is scaled once it is known
+   (end_scale) instead of visiting the candidates a second and third time. */
 static void end_value(void *vp, size_t b, size_t e) {
   end_job *j = vp;
   for (size_t q = b; q < e; q++) {
     size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
-    mgs_gaussians v = slice(j->t->loc, s, cnt);
+    mgs_gaussians v = slice(j->t->loc, s, cnt), vg = slice(j->t->locg, s, cnt);
+    mgs_morse_point pt = {0};
     j->aval[q] = 0;
-    if (cnt) j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, 0, NULL, &j->aval[q], NULL);
+    j->den[q] = 1;
+    if (cnt) j->st[q] = mgs_morse_sdf_point_unit_grad(&v, j->t->pts + 3 * q, j->tau, &vg, &pt, &j->den[q], NULL);
+    j->aval[q] = pt.alpha;
   }
 }
 
-static void end_grad(void *vp, size_t b, size_t e) {
+static void end_scale(void *vp, size_t b, size_t e) {
   end_job *j = vp;
   for (size_t q = b; q < e; q++) {
     size_t s = j->t->gat.start[q], cnt = j->t->gat.start[q + 1] - s;
-    if (j->weight[q] == 0 || cnt == 0) continue;
-    mgs_gaussians v = slice(j->t->loc, s, cnt), vg = slice(j->t->locg, s, cnt);
-    j->st[q] = mgs_morse_sdf_point_grad(&v, j->t->pts + 3 * q, j->tau, j->weight[q], &vg, NULL, NULL);
+    mgs_gaussians *L = j->t->locg;
+    if (!isfinite(j->weight[q])) { j->st[q] = MGS_ERR_NUMERIC; continue; }
+    /* no contributor at c (den 0) or no weight: no gradient, as the two-pass form */
+    const double f = j->weight[q] != 0 && j->den[q] > 0 ? -j->weight[q] / j->den[q] : 0.0;
+    for (size_t r = s; r < s + cnt; r++) {
+      L->opacity[r] = (float)(f * L->opacity[r]);
+      for (int k = 0; k < 3; k++) {
+        L->mean[3 * r + k] = (float)(f * L->mean[3 * r + k]);
+        L->log_scale[3 * r + k] = (float)(f * L->log_scale[3 * r + k]);
+      }
+      for (int k = 0; k < 4; k++) L->rot[4 * r + k] = (float)(f * L->rot[4 * r + k]);
+    }
   }
 }
 
@@ -154,10 +170,10 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
      reads (and writes its gradient into) its own slice, so ends run in parallel */
   size_t total = t->gat.start[t->n_ends];
   st = gather_all(t, g, total, err);
-  double *aval = malloc((t->n_ends + 1) * sizeof(double));
+  double *aval = malloc((t->n_ends + 1) * sizeof(double)), *den = malloc((t->n_ends + 1) * sizeof(double));
   mgs_status *est = calloc(t->n_ends + 1, sizeof(mgs_status));
-  if (st == MGS_OK && (!aval || !est)) st = mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
-  end_job job = {t, (float)o->tau, aval, NULL, est};
+  if (st == MGS_OK && (!aval || !den || !est)) st = mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  end_job job = {t, (float)o->tau, aval, den, NULL, est};
   if (st == MGS_OK) {
     mgs_parallel_for(0, t->n_ends, 8, end_value, &job);
     for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
@@ -200,10 +216,8 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
       size_t k = t->end_pair[e] / 2;
       w[e] = beta * ((t->end_pair[e] & 1) ? dld[k] : dlb[k]);
     }
-    for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++)
-      memset(mgs_gaussians_group(t->locg, (mgs_param_group)gr), 0, total * (size_t)mgs_param_dim((mgs_param_group)gr) * sizeof(float));
     job.weight = w;
-    mgs_parallel_for(0, t->n_ends, 8, end_grad, &job);
+    mgs_parallel_for(0, t->n_ends, 8, end_scale, &job);
     for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
       if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the gradient at a bar end is not finite");
     /* scatter, in a fixed order */
@@ -217,7 +231,7 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
       }
     }
   }
-  free(aval); free(est); free(out);
+  free(aval); free(den); free(est); free(out);
   free(d.pairs); free(dlb); free(dld);
   return st;
 }

@@ -132,6 +132,30 @@ static void test_components(void) {
   CHECK_OK(mgs_topo_gaussians_touching(c, both, 2, g, 1.0, &idx, &n, &e), &e);
   CHECK(n == 3 && idx[0] == 0 && idx[1] == 4 && idx[2] == 5);
   free(idx);
+  /* one Gaussian's answer reads nothing of the others (so a caller may ask only some
+     rows, e.g. the first answer's): every subset of rows, asked as a
+     model of its own, gets the full model's answers for those rows */
+  for (int k3 = 0; k3 < 2; k3++) {
+    int32_t big = 0, *q = k3 ? both : &big;
+    size_t nq = k3 ? 2 : 1, *full = NULL, nfull = 0;
+    CHECK_OK(mgs_topo_gaussians_touching(c, q, nq, g, 3.0, &full, &nfull, &e), &e);
+    int in_full[6] = {0};
+    for (size_t i = 0; i < nfull; i++) in_full[full[i]] = 1;
+    for (unsigned mask = 1; mask < 64; mask++) {
+      size_t rows[6], nr = 0, *sub_idx = NULL, nsub = 0;
+      for (size_t i = 0; i < 6; i++) if (mask & (1u << i)) rows[nr++] = i;
+      mgs_gaussians *sub = mgs_gaussians_select(g, rows, nr);
+      CHECK(sub != NULL);
+      if (!sub) break;
+      CHECK_OK(mgs_topo_gaussians_touching(c, q, nq, sub, 3.0, &sub_idx, &nsub, &e), &e);
+      int in_sub[6] = {0};
+      for (size_t i = 0; i < nsub; i++) in_sub[rows[sub_idx[i]]] = 1;
+      for (size_t i = 0; i < nr; i++) CHECK(in_sub[rows[i]] == in_full[rows[i]]);
+      free(sub_idx);
+      mgs_gaussians_destroy(sub);
+    }
+    free(full);
+  }
   int32_t bad = 7;
   CHECK(mgs_topo_gaussians_touching(c, &bad, 1, g, 1.0, &idx, &n, &e) == MGS_ERR_ARG);
   mgs_gaussians_destroy(g);

@@ -609,6 +609,73 @@ static void test_cost(void) {
   mgs_gaussians_destroy(g);
 }
 
+/* ---------------------------------------------------------------- one pass vs two */
+/* The topological loss' one-pass form (unit derivative, scaled once the weight is known)
+ * against mgs_morse_sdf_point_grad(weight): the same A, and every gradient entry within
+ * float rounding (1e-6 of the largest entry), at tiny and huge scales, a 1e5 offset, the
+ * floored flat point and a point no Gaussian reaches. It fails if the scale, the sign,
+ * the floor or a row's reset is wrong. */
+static void one_vs_two(const mgs_gaussians *g, const double c[3], float tau, double w, int expect_floor) {
+  mgs_error err;
+  mgs_gaussians *two = mgs_gaussians_clone(g), *one = mgs_gaussians_clone(g);
+  for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++) {
+    memset(mgs_gaussians_group(two, (mgs_param_group)gr), 0, g->n * (size_t)mgs_param_dim((mgs_param_group)gr) * sizeof(float));
+    /* garbage in the unit model: every row must be overwritten */
+    float *u = mgs_gaussians_group(one, (mgs_param_group)gr);
+    for (size_t k = 0; k < g->n * (size_t)mgs_param_dim((mgs_param_group)gr); k++) u[k] = 123.0f;
+  }
+  double A2 = -1, den = -1;
+  CHECK_OK(mgs_morse_sdf_point_grad(g, c, tau, w, two, &A2, &err), &err);
+  mgs_morse_point pt;
+  CHECK_OK(mgs_morse_sdf_point_unit_grad(g, c, tau, one, &pt, &den, &err), &err);
+  CHECK(pt.alpha == A2);
+  CHECK(pt.floored == expect_floor);
+  double f = pt.contributors > 0 && den > 0 ? -w / den : 0, mx = 0, worst = 0;
+  for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++) {
+    const float *a = mgs_gaussians_group(two, (mgs_param_group)gr), *b = mgs_gaussians_group(one, (mgs_param_group)gr);
+    for (size_t k = 0; k < g->n * (size_t)mgs_param_dim((mgs_param_group)gr); k++) mx = fmax(mx, fabs(a[k]));
+    for (size_t k = 0; k < g->n * (size_t)mgs_param_dim((mgs_param_group)gr); k++) worst = fmax(worst, fabs(a[k] - (float)(f * b[k])));
+  }
+  CHECK(isfinite(worst) && worst <= 1e-6 * mx + 1e-30);
+  if (pt.contributors > 0 && w != 0) CHECK(mx > 0);
+  mgs_gaussians_destroy(one);
+  mgs_gaussians_destroy(two);
+}
+
+static void test_unit_grad_one_pass(void) {
+  const double scales[3] = {1e-4, 1.0, 1e3};
+  for (int si = 0; si < 3; si++)
+    for (int off = 0; off < 2; off++) {
+      double o[3] = {off ? 1e5 : 0, off ? -1e5 : 0, 0.5};
+      mgs_gaussians *g = cluster(40, scales[si], o, 7 + (uint64_t)si);
+      double c[3] = {o[0] + 0.1 * scales[si], o[1] - 0.05 * scales[si], o[2] + 0.02 * scales[si]};
+      double A;
+      mgs_error err;
+      CHECK_OK(mgs_morse_alpha_at(g, NULL, NULL, c, &A, NULL, &err), &err);
+      one_vs_two(g, c, (float)(0.9 * A), 0.37, 0);
+      one_vs_two(g, c, (float)(0.9 * A), 0.0, 0);
+      mgs_gaussians_destroy(g);
+    }
+  /* the flat midpoint of two equal Gaussians (floored normal) and a point out of reach */
+  mgs_gaussians *g = model(2);
+  for (int i = 0; i < 2; i++) {
+    g->mean[3 * i] = i ? 0.5f : -0.5f;
+    for (int k = 0; k < 3; k++) g->log_scale[3 * i + k] = logf(0.4f);
+    g->opacity[i] = 2.0f;
+  }
+  double mid[3] = {0, 0, 0}, far[3] = {50, 0, 0}, A;
+  mgs_error err;
+  CHECK_OK(mgs_morse_alpha_at(g, NULL, NULL, mid, &A, NULL, &err), &err);
+  one_vs_two(g, mid, (float)A, -2.5, 1);
+  one_vs_two(g, far, 0.3f, 1.0, 0);
+  mgs_gaussians *small = model(1);
+  mgs_morse_point pt;
+  CHECK(mgs_morse_sdf_point_unit_grad(g, mid, 0.3f, small, &pt, NULL, &err) == MGS_ERR_ARG);
+  CHECK(mgs_morse_sdf_point_unit_grad(g, mid, 0.0f, g, &pt, NULL, &err) == MGS_ERR_ARG);
+  mgs_gaussians_destroy(small);
+  mgs_gaussians_destroy(g);
+}
+
 int main(void) {
   RUN(test_field_matches_vdb);
   RUN(test_spatial_gradient_and_index);
@@ -618,6 +685,7 @@ int main(void) {
   RUN(test_grid_closest_flat);
   RUN(test_chain);
   RUN(test_flat_gradient_guard);
+  RUN(test_unit_grad_one_pass);
   RUN(test_cost);
   return mgs_test_finish();
 }

@@ -480,7 +480,8 @@ void mgs_config_usage(FILE *f) {
 
 /* ---- the options of each layer ---- */
 /* A value the user (or a preset or the record) set; otherwise the layer's own default
-   stays, bit for bit (float defaults such as 2.5e-3f / 20 have no exact decimal form). */
+   stays, bit for bit. A resume takes every value from the record, so each layer default
+   must equal its table value converted (tests/train/test_config.c checks it). */
 static int set_here(const mgs_train_config *c, const char *name) {
   const mgs_option *o = mgs_config_find(name);
   return o && c->source[index_of(o)] != MGS_CFG_DEFAULT;

@@ -74,6 +74,27 @@ static void defaults_agree(void) {
         p.downsample == pd.downsample && !memcmp(p.k, pd.k, sizeof p.k));
   mgs_normal_options no;
   CHECK(mgs_config_normal_options(&c, &no) == 0);
+  /* bit for bit: a fresh run keeps the layer's default where nothing was typed, a resume
+     takes the recorded table value (an ulp between them made resumes differ once SH rest
+     was stepped) */
+  mgs_settings s;
+  mgs_settings_init(&s);
+  mgs_config_record(&c, &s);
+  mgs_train_config r;
+  mgs_config_defaults(&r);
+  mgs_error err;
+  CHECK_OK(mgs_config_restore(&r, &s, "RUN/cfg_args", &err), &err);
+  mgs_settings_free(&s);
+  mgs_train_options ro;
+  mgs_config_train_options(&r, &ro);
+  static const char *const names[] = {"lambda-dssim", "position-lr-init", "position-lr-final", "feature-lr",
+                                      "feature-rest-lr", "opacity-lr", "scaling-lr", "rotation-lr"};
+  const double fresh[] = {d.lambda_dssim, d.lr_mean_init, d.lr_mean_final, d.lr_sh_dc, d.lr_sh_rest, d.lr_opacity, d.lr_log_scale, d.lr_rot};
+  const double resumed[] = {ro.lambda_dssim, ro.lr_mean_init, ro.lr_mean_final, ro.lr_sh_dc, ro.lr_sh_rest, ro.lr_opacity,
+                            ro.lr_log_scale, ro.lr_rot};
+  for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)
+    CHECK_MSG(fresh[k] == resumed[k], "--%s: default %.17g, from the record %.17g", names[k], fresh[k], resumed[k]);
+  CHECK(memcmp(&ro.adc, &d.adc, sizeof ro.adc) == 0);
 }
 
 static void parsing(void) {

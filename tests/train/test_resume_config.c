@@ -2,8 +2,8 @@
  * stopped at iteration 70 (MGS_TRAIN_INTERRUPT_AT, as Ctrl-C) and resumed with a bare
  * `--resume` ends byte-identical to the uninterrupted run — for settings that were once
  * lost on resume (--sparse-adam/--dense-adam, --view-order, --visibility, --image-cache-mb)
- * and for a MorseGS preset; a resume typing a contradicting value is refused naming both;
- * cfg_args holds each of them. */
+ * and for a MorseGS preset, and with the SH degree raised before and after the interrupt; a
+ * resume typing a contradicting value is refused naming both; cfg_args holds each of them. */
 #include "mgs_test.h"
 #include "core/mgs_core.h"
 
@@ -22,6 +22,10 @@ int main(void) {
     {"--image-cache-mb 1", "image_cache_mb=1", "--image-cache-mb 0", "image_cache_mb = 1"},
     {"--preset morse-r --morse-warmup 30 --morse-every 30 --morse-resolution 48", "topo_loss='eliminate'", "--beta 0.01",
      "topo_beta = 0.003"},
+    /* the SH degree raised before and after the interrupt: SH-rest steps use feature_rest_lr,
+       which a resume reads from the record (the trainer's own default once differed by an ulp) */
+    {"--sh-every 30", "sh_increase_every=30", "--sh-every 40", "sh_increase_every = 30"},
+    {"--sh-every 30 --sh-moments-bf16", "sh_moments_bf16=True", "--sh-moments-bf16=false", "sh_moments_bf16 = True"},
   };
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
     char a[512], b[512], path[1100];

@@ -302,7 +302,7 @@ static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
   }
   /* the reference learning rates (scene extent ~ 2) */
   adam->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; adam->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; adam->lr[MGS_PARAM_ROT] = 1e-3f;
-  adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
+  adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 1.25e-4f;
   adam->sh_rest_active = 15;
   mgs_adam_set_sh_rest_bf16(adam, bf16);
   mgs_camera cam;
@@ -482,7 +482,7 @@ static int run_model_pair(int size, size_t n, int iters) {
   for (int m = 0; m < 2; m++) {
     mgs_adam *a = adam[m];
     a->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; a->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; a->lr[MGS_PARAM_ROT] = 1e-3f;
-    a->lr[MGS_PARAM_OPACITY] = 0.05f; a->lr[MGS_PARAM_SH_DC] = 2.5e-3f; a->lr[MGS_PARAM_SH_REST] = 2.5e-3f / 20.0f;
+    a->lr[MGS_PARAM_OPACITY] = 0.05f; a->lr[MGS_PARAM_SH_DC] = 2.5e-3f; a->lr[MGS_PARAM_SH_REST] = 1.25e-4f;
     a->sh_rest_active = 15;
   }
   mgs_camera cam;

@@ -17,8 +17,9 @@ typedef struct mgs_gauss_local {
   double alpha;           /* sigmoid(logit) */
 } mgs_gauss_local;
 
-static inline void mgs_gauss_local_get(const mgs_gaussians *g, size_t i, mgs_gauss_local *o) {
-  for (int k = 0; k < 3; k++) o->mu[k] = g->mean[3 * i + k];
+/* The rotation part alone (qnorm, qhat, R): for readers that need no mean, scale or
+   opacity (the normal loss). */
+static inline void mgs_gauss_local_rotation(const mgs_gaussians *g, size_t i, mgs_gauss_local *o) {
   const float *q = g->rot + 4 * i;
   double n = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
   o->qnorm = n;
@@ -29,6 +30,11 @@ static inline void mgs_gauss_local_get(const mgs_gaussians *g, size_t i, mgs_gau
     o->qhat[1] = o->qhat[2] = o->qhat[3] = 0;
   }
   mgs_quat_to_mat3d(o->qhat, o->R);
+}
+
+static inline void mgs_gauss_local_get(const mgs_gaussians *g, size_t i, mgs_gauss_local *o) {
+  for (int k = 0; k < 3; k++) o->mu[k] = g->mean[3 * i + k];
+  mgs_gauss_local_rotation(g, i, o);
   for (int k = 0; k < 3; k++) {
     double ls = g->log_scale[3 * i + k];
     o->ls_clamped[k] = ls > 300.0;

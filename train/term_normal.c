@@ -51,22 +51,6 @@ typedef struct normal_job {
   size_t *cnt;   /* per chunk */
 } normal_job;
 
-/* The rotation part of mgs_gauss_local_get (the same expressions, so the same R, q̂ and
-   |q|): the loss reads no mean, scale or opacity, so the full set-up's four exp per row
-   are skipped; the gradients are bit-identical. */
-static void rotation_only(const mgs_gaussians *g, size_t i, mgs_gauss_local *o) {
-  const float *q = g->rot + 4 * i;
-  double n = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
-  o->qnorm = n;
-  if (n > 0)
-    for (int k = 0; k < 4; k++) o->qhat[k] = q[k] / n;
-  else {
-    o->qhat[0] = 1;
-    o->qhat[1] = o->qhat[2] = o->qhat[3] = 0;
-  }
-  mgs_quat_to_mat3d(o->qhat, o->R);
-}
-
 static void normal_rows(void *vp, size_t cb, size_t ce) {
   const normal_job *j = vp;
   const mgs_gaussians *g = j->g;
@@ -81,7 +65,7 @@ static void normal_rows(void *vp, size_t cb, size_t ce) {
       if (!(tr >= 0.05) || !isfinite(tr)) continue; /* outside the band: no direction */
       const double M[9] = {t6[0] / tr, t6[1] / tr, t6[2] / tr, t6[1] / tr, t6[3] / tr, t6[4] / tr, t6[2] / tr, t6[4] / tr, t6[5] / tr};
       mgs_gauss_local L;
-      rotation_only(g, i, &L);
+      mgs_gauss_local_rotation(g, i, &L);
       /* weights w_k = softmax(−2p log s_k) (shifted by the max for exp's range) */
       double z[3], zmax = -INFINITY, w[3], ws = 0, cc[3], Mr[3][3], h = 0;
       for (int k = 0; k < 3; k++) { z[k] = -2.0 * p * (double)g->log_scale[3 * i + k]; zmax = fmax(zmax, z[k]); }

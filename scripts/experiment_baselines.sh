@@ -17,7 +17,7 @@
 # has every scene and variant with its first seeds.
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS, VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
-# SWEEP ("0.25,0.5,2,4"; "none"), MORSEGS (a frozen binary for a run spread over days),
+# SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), MORSEGS (a frozen binary for a run spread over days),
 # MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
 # runs and the estimated time, train nothing).
 set -euo pipefail
@@ -45,13 +45,13 @@ for b in $SCENES; do
   data+=("$dir/scenes/$b")
 done
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
-  --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" \
+  --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" --sweep-seeds "${SWEEP_SEEDS:-3}" \
   --train-arg=--schedule-scale="$SCALE" \
   --variant 2dgs="--model 2dgs" --variant 2dgs-morse-r="--model 2dgs --preset morse-r" \
   --variant mini-splatting="--strategy mini-splatting" \
   --variant ms-morse-r="--strategy mini-splatting --preset morse-r" \
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
-  --variants baseline,morse-r,morse-full,2dgs,2dgs-morse-r,mini-splatting,ms-morse-r,sugar,gaussianpro \
+  --variants baseline,2dgs,mini-splatting,sugar,gaussianpro,morse-r,2dgs-morse-r,ms-morse-r,morse-full \
   --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
   --variant-seeds sugar="${SEEDS_OTHER:-3}" --variant-seeds gaussianpro="${SEEDS_OTHER:-3}" \
   --sweep-variants baseline,mini-splatting --jobs "${JOBS:-2}" ${PLAN:+--plan}

@@ -304,7 +304,7 @@ static int run_iteration(int size, size_t n, int iters, int fused, int bf16) {
   adam->lr[MGS_PARAM_MEAN] = 1.6e-4f * 2.0f; adam->lr[MGS_PARAM_LOG_SCALE] = 5e-3f; adam->lr[MGS_PARAM_ROT] = 1e-3f;
   adam->lr[MGS_PARAM_OPACITY] = 0.05f; adam->lr[MGS_PARAM_SH_DC] = 2.5e-3f; adam->lr[MGS_PARAM_SH_REST] = 1.25e-4f;
   adam->sh_rest_active = 15;
-  mgs_adam_set_sh_rest_bf16(adam, bf16);
+  if (mgs_adam_set_sh_rest_bf16(adam, bf16, &err)) { fprintf(stderr, "morsegs bench raster: %s\n", err.msg); return 1; }
   mgs_camera cam;
   mgs_camera_init_fovx(&cam, size, size, 60.0 * 3.14159265358979 / 180.0);
   double eye[3] = {2.4, -2.8, 1.6}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1};

@@ -39,6 +39,7 @@
 #include "apps/mgs_cli.h"
 #include "apps/mgs_experiment.h"
 #include "core/mgs_core.h"
+#include "train/mgs_train.h"
 #include "topo/mgs_diagram_plot.h"
 
 /* ---------------------------------------------------------------- the variant table */
@@ -320,12 +321,12 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   mgs_error err;
   mgs_error_clear(&err);
   reason[0] = 0;
-  if (mgs_is_dir(it->dir) && mgs_remove_tree(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); return 1; }
-  if (mgs_mkdir_p(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); return 1; }
-  char *tlog = mgs_path_join(it->dir, "train.log"), *elog = mgs_path_join(it->dir, "eval.log");
   /* train */
-  char iters_s[32], seed_s[32], knob_s[64], save_s[512] = "";
+  char iters_s[32], seed_s[32], knob_s[64], save_s[512] = "", ckpt_s[32];
   snprintf(iters_s, sizeof iters_s, "%d", e->iters);
+  /* a checkpoint every tenth of the run: a run killed part-way (the machine's session
+     ended) continues from its last one, not from the start */
+  snprintf(ckpt_s, sizeof ckpt_s, "%d", e->iters / 10 > 100 ? e->iters / 10 : 100);
   snprintf(seed_s, sizeof seed_s, "%d", it->seed);
   snprintf(knob_s, sizeof knob_s, "%.6g", vs->knob_default * it->factor);
   if (!it->sweep)
@@ -339,13 +340,45 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   argv[a++] = "morsegs"; argv[a++] = "train"; argv[a++] = ds->path; argv[a++] = "-o"; argv[a++] = it->dir;
   argv[a++] = "--iters"; argv[a++] = iters_s; argv[a++] = "--seed"; argv[a++] = seed_s;
   if (save_s[0]) { argv[a++] = "--save-at"; argv[a++] = save_s; } /* else train's default (harmless) */
-  argv[a++] = "--checkpoint-every"; argv[a++] = "0";
-  argv[a++] = "--force"; argv[a++] = "--quiet";
+  argv[a++] = "--checkpoint-every"; argv[a++] = ckpt_s;
+  argv[a++] = "--quiet";
   for (int k = 0; vs->def->args[k] && a < 40; k++) argv[a++] = vs->def->args[k];
   if (it->factor != 1.0) { argv[a++] = vs->knob; argv[a++] = knob_s; }
-  for (size_t k = 0; k < e->train_args.n && a < 62; k++) argv[a++] = e->train_args.v[k];
+  for (size_t k = 0; k < e->train_args.n && a < 61; k++) argv[a++] = e->train_args.v[k];
+  const int mode_at = a; /* --force (a new run) or --resume (an interrupted one) */
+  argv[a++] = "--force";
   argv[a] = NULL;
-  int rc = run_child((char *const *)argv, tlog);
+  /* the run's command without its mode: a folder left by a run with the same command
+     continues; anything else is started again */
+  char sig[8192] = "";
+  for (int k = 0; k < mode_at; k++) {
+    size_t l = strlen(sig);
+    snprintf(sig + l, sizeof sig - l, "%s\n", argv[k]);
+  }
+  char *sigp = mgs_path_join(it->dir, "experiment_args"), *ckpt = mgs_path_join(it->dir, "checkpoint.mgsckpt");
+  int trained = 0, resume = 0;
+  {
+    char *text = NULL;
+    size_t n = 0;
+    if (mgs_is_dir(it->dir) && mgs_read_file(sigp, &text, &n, NULL) == MGS_OK && n == strlen(sig) && !memcmp(text, sig, n)) {
+      char *stats = mgs_path_join(it->dir, "train_stats.json");
+      trained = isfinite(mgs_run_saved_seconds(it->dir, e->iters)) && mgs_path_exists(stats);
+      resume = !trained && mgs_path_exists(ckpt);
+      free(stats);
+    }
+    free(text);
+  }
+  if (!trained && !resume) {
+    if (mgs_is_dir(it->dir) && mgs_remove_tree(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); free(sigp); free(ckpt); return 1; }
+    if (mgs_mkdir_p(it->dir, &err) || mgs_write_file_atomic(sigp, sig, strlen(sig), &err)) {
+      snprintf(reason, reason_n, "%s", err.msg); free(sigp); free(ckpt); return 1;
+    }
+  }
+  free(sigp);
+  char *tlog = mgs_path_join(it->dir, "train.log"), *elog = mgs_path_join(it->dir, "eval.log");
+  int rc = 0;
+  if (resume) argv[mode_at] = "--resume";
+  if (!trained) rc = run_child((char *const *)argv, tlog);
   int result = 0;
   if (g_stop || rc == 130) { result = 3; goto done; }
   if (rc == 2) {
@@ -425,8 +458,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     }
     /* training wall time at this save: the trainer's total minus the time between this
        .ply and the final one (the final .ply is written right after the last iteration) */
-    double tn = mtime_of(ply);
-    p->wall_seconds = isfinite(t_final) && isfinite(tn) ? fmax(0.0, out->train_seconds - (t_final - tn)) : NAN;
+    double tn = mtime_of(ply), ts = mgs_run_saved_seconds(it->dir, iter);
+    p->wall_seconds = isfinite(ts) ? ts : isfinite(t_final) && isfinite(tn) ? fmax(0.0, out->train_seconds - (t_final - tn)) : NAN;
     if (iter == e->iters) p->wall_seconds = out->train_seconds;
     for (int q = 0; q < 3; q++) p->betti[q] = p->betti_persistent[q] = -1;
     p->floater_mass = p->floater_mass_fraction = p->bottleneck = NAN;
@@ -443,9 +476,11 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   {
     char *rp = mgs_path_join(it->dir, "result.json");
     if (exp_run_write(rp, out, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; }
+    else remove(ckpt); /* a finished run is never resumed: its checkpoint is only disk */
     free(rp);
   }
 done:
+  free(ckpt);
   free(tlog);
   free(elog);
   return result;

@@ -107,7 +107,7 @@ static mgs_status write_stats(const char *run, const mgs_train_setup *su, mgs_er
 static mgs_status clear_run(const char *run, mgs_error *err) {
   static const char *dirs[] = {"point_cloud", "eval", "renders"};
   static const char *files[] = {"checkpoint.mgsckpt", "cameras.json", "cfg_args", "results.json", "train_stats.json",
-                                "morse_analysis.csv"};
+                                "morse_analysis.csv", "saves.csv"};
   for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++) {
     char *p = mgs_path_join(run, dirs[i]);
     mgs_status st = p && mgs_is_dir(p) ? mgs_remove_tree(p, err) : MGS_OK;
@@ -238,6 +238,7 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
     if (at < mgs_trainer_model_iteration(t) && i < n_saves) continue;
     st = mgs_trainer_run_to(t, at, &err);
     if (st == MGS_OK && i < n_saves) st = mgs_run_write_ply(run, at, mgs_trainer_model(t), &err);
+    if (st == MGS_OK && i < n_saves) st = mgs_run_record_save(run, at, mgs_trainer_seconds(t), mgs_trainer_model(t)->n, &err);
   }
   sigaction(SIGINT, &old, NULL);
   if (st == MGS_ERR_INTERRUPTED) {
@@ -251,6 +252,7 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
   }
   if (st) goto done;
   if ((st = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &err))) goto done;
+  if ((st = mgs_run_record_save(run, mgs_trainer_iteration(t), mgs_trainer_seconds(t), mgs_trainer_model(t)->n, &err))) goto done;
   if ((st = write_stats(run, &su, &err))) goto done;
   if (su.morse) {
     if ((st = mgs_morse_ctx_flush_csv(su.morse, &err))) goto done;

@@ -41,16 +41,17 @@ mgs_status mgs_adam_append(mgs_adam *a, size_t count, mgs_error *err) {
       size_t d = (size_t)mgs_param_dim((mgs_param_group)g);
       float *m = realloc(a->m[g], cap * d * sizeof(float));
       if (m) a->m[g] = m;
-      float *v = m ? realloc(a->v[g], cap * d * sizeof(float)) : NULL;
+      /* packed SH-rest moments have no v array (mgs_adam.sh_rest_bf16) */
+      float *v = m && a->v[g] ? realloc(a->v[g], cap * d * sizeof(float)) : NULL;
       if (v) a->v[g] = v;
-      if (!m || !v) return mgs_error_set(err, MGS_ERR_NOMEM, "adam: cannot grow moments to %zu Gaussians", cap);
+      if (!m || (a->v[g] && !v)) return mgs_error_set(err, MGS_ERR_NOMEM, "adam: cannot grow moments to %zu Gaussians", cap);
     }
     a->capacity = cap;
   }
   for (int g = 0; g < MGS_PARAM_COUNT; g++) {
     size_t d = (size_t)mgs_param_dim((mgs_param_group)g);
     memset(a->m[g] + a->n * d, 0, count * d * sizeof(float));
-    memset(a->v[g] + a->n * d, 0, count * d * sizeof(float));
+    if (a->v[g]) memset(a->v[g] + a->n * d, 0, count * d * sizeof(float));
   }
   a->n = need;
   return MGS_OK;
@@ -61,7 +62,7 @@ void mgs_adam_compact(mgs_adam *a, const uint8_t *keep) {
   for (int g = 0; g < MGS_PARAM_COUNT; g++) {
     int d = mgs_param_dim((mgs_param_group)g);
     n = mgs_rows_compact(a->m[g], a->n, d, keep);
-    mgs_rows_compact(a->v[g], a->n, d, keep);
+    if (a->v[g]) mgs_rows_compact(a->v[g], a->n, d, keep);
   }
   a->n = n;
 }
@@ -69,7 +70,7 @@ void mgs_adam_compact(mgs_adam *a, const uint8_t *keep) {
 void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group) {
   size_t d = (size_t)mgs_param_dim(group);
   memset(a->m[group], 0, a->n * d * sizeof(float));
-  memset(a->v[group], 0, a->n * d * sizeof(float));
+  if (a->v[group]) memset(a->v[group], 0, a->n * d * sizeof(float));
 }
 
 /* One fused pass: every selected group's elements are cut into units of ADAM_UNIT floats
@@ -149,25 +150,33 @@ static int adam_span_bf16(const mgs_adam_group *c, size_t b, size_t e) {
   return bad;
 }
 
-void mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on) {
+mgs_status mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on, mgs_error *err) {
   on = on != 0;
-  if (on == a->sh_rest_bf16) return;
+  if (on == a->sh_rest_bf16) return MGS_OK;
   uint32_t *w = (uint32_t *)(void *)a->m[MGS_PARAM_SH_REST];
-  float *v = a->v[MGS_PARAM_SH_REST];
   size_t n = a->n * MGS_SH_REST_MAX;
+  float *v = a->v[MGS_PARAM_SH_REST];
+  if (!on) {
+    v = malloc(a->capacity * MGS_SH_REST_MAX * sizeof(float));
+    if (!v) return mgs_error_set(err, MGS_ERR_NOMEM, "adam: cannot unpack the SH-rest moments of %zu Gaussians", a->n);
+  }
   for (size_t i = 0; i < n; i++) {
     if (on) { /* round to nearest even */
       uint32_t mu = f2u(u2f(w[i])), vu = f2u(v[i]);
       mu += 0x7FFFu + ((mu >> 16) & 1u);
       vu += 0x7FFFu + ((vu >> 16) & 1u);
       w[i] = (mu >> 16) | (vu & 0xFFFF0000u);
-      v[i] = 0;
     } else {
       v[i] = u2f(w[i] & 0xFFFF0000u);
       w[i] = w[i] << 16;
     }
   }
+  /* packed: the v array is freed, which is the memory the option saves (180 bytes a
+     Gaussian, about a fifth of the trainer's per-Gaussian state) */
+  if (on) { free(v); v = NULL; }
+  a->v[MGS_PARAM_SH_REST] = v;
   a->sh_rest_bf16 = on;
+  return MGS_OK;
 }
 
 /* The element loop is written so the compiler vectorizes it (restrict pointers, constants

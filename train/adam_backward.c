@@ -37,7 +37,8 @@ static void adam_sink(void *vctx, size_t first, size_t count, const mgs_gaussian
   for (int k = 0; k < c->n_grp; k++) {
     mgs_adam_group gp = c->grp[k];
     size_t row = gp.row, off = first * row;
-    gp.p += off; gp.m += off; gp.v += off;
+    gp.p += off; gp.m += off;
+    if (gp.v) gp.v += off; /* NULL for packed SH-rest moments */
     gp.elem0 = off;
     gp.g = mgs_gaussians_group((mgs_gaussians *)block, (mgs_param_group)c->gid[k]);
     int bad = 0;

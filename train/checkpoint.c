@@ -114,7 +114,14 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   for (int k = 0; k < MGS_PARAM_COUNT; k++) {
     size_t bytes = t->g->n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float);
     hw(&w, t->adam->m[k], bytes);
-    hw(&w, t->adam->v[k], bytes);
+    if (t->adam->v[k]) hw(&w, t->adam->v[k], bytes);
+    else /* packed SH-rest moments (v in m's words): zeros, the layout of every version */
+      for (size_t z = 0; z < bytes;) {
+        static const char zeros[4096];
+        size_t c = bytes - z < sizeof zeros ? bytes - z : sizeof zeros;
+        hw(&w, zeros, c);
+        z += c;
+      }
   }
   uint64_t bl = blob_len;
   hw(&w, sname, sizeof sname);
@@ -198,7 +205,10 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
     ok = ok && rd(&r, mgs_gaussians_group(t->g, (mgs_param_group)k), n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float));
   for (int k = 0; k < MGS_PARAM_COUNT; k++) {
     size_t bytes = n * (size_t)mgs_param_dim((mgs_param_group)k) * sizeof(float);
-    ok = ok && rd(&r, t->adam->m[k], bytes) && rd(&r, t->adam->v[k], bytes);
+    ok = ok && rd(&r, t->adam->m[k], bytes);
+    if (t->adam->v[k]) ok = ok && rd(&r, t->adam->v[k], bytes);
+    else if (ok && bytes <= r.left) { r.p += bytes; r.left -= bytes; } /* packed: v is in m's words */
+    else ok = 0;
   }
   char sname[32];
   uint64_t bl = 0;

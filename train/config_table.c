@@ -127,7 +127,7 @@ static const mgs_option TABLE[] = {
    "auto-on; --sparse-adam, --dense-adam", NULL},
   {"sh-moments-bf16", "sh_moments_bf16", MGS_OPT_BOOL, F(sh_moments_bf16), "0", 0, 1, NULL, "1", MGS_GROUP_SCALE,
    REC | MPI, "store the SH-rest Adam moments as bfloat16, stochastically rounded (a third less memory traffic a "
-   "step; not the reference; docs/notes/iteration-bytes.md)", NULL},
+   "step, 180 bytes a Gaussian less memory; not the reference; docs/notes/iteration-bytes.md)", NULL},
   {"image-cache-mb", "image_cache_mb", MGS_OPT_INT, F(image_cache_mb), "0", 0, BIG, NULL, NULL, MGS_GROUP_SCALE,
    REC | MPI, "stream train images through an 8-bit cache of N MiB with a prefetch thread (0 = all as floats)", NULL},
   {"view-order", "view_order", MGS_OPT_ENUM, F(view_locality), "random", 0, 0, "random|locality", NULL,

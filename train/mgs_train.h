@@ -45,7 +45,7 @@ typedef struct mgs_adam {
   /* SH-rest moments stored as bfloat16 (set with mgs_adam_set_sh_rest_bf16): m[SH_REST]
    * then holds one 32-bit word per coefficient, m in the low and v in the high 16 bits,
    * rounded stochastically (a hash of the element and the step: unbiased, so v's 0.999
-   * decay is not lost to rounding; deterministic); v[SH_REST] is unused. Moves 16 instead
+   * decay is not lost to rounding; deterministic); v[SH_REST] is NULL (freed). Moves 16 instead
    * of 24 bytes per SH-rest float a step (45 of the 59 floats a Gaussian). Row operations
    * (append, compact, copies, checkpoints) carry the words unchanged. Not the reference:
    * off by default (bench train measures its effect on quality). */
@@ -60,8 +60,9 @@ mgs_status mgs_adam_append(mgs_adam *a, size_t count, mgs_error *err);
 /* Keeps rows with keep[i] != 0, in order (the same mask as mgs_gaussians_compact). */
 void mgs_adam_compact(mgs_adam *a, const uint8_t *keep);
 /* Switches the SH-rest moments to (on != 0) or from bfloat16 storage, converting the
- * moments held (round to nearest). */
-void mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on);
+ * moments held (round to nearest); packing frees v[SH_REST] (NULL while packed),
+ * unpacking allocates it again (MGS_ERR_NOMEM if it cannot; nothing changed then). */
+mgs_status mgs_adam_set_sh_rest_bf16(mgs_adam *a, int on, mgs_error *err);
 /* Zeroes one group's moments (what the reference does when it replaces a tensor). */
 void mgs_adam_reset_group(mgs_adam *a, mgs_param_group group);
 /* One Adam step on every group whose bit is set in group_mask (1 << group).
@@ -303,6 +304,15 @@ mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs
 /* RUN/point_cloud/iteration_N/point_cloud.ply (world coordinates: g->origin added, see
  * mgs_ply_write_gaussians) */
 mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
+/* Appends "iteration,train_seconds,gaussians" to RUN/saves.csv (header first when new):
+ * the training time at each saved model, which survives a kill and a --resume (file
+ * times of the .ply files do not). Rewritten whole through a temp file, so a kill never
+ * leaves a half line. */
+mgs_status mgs_run_record_save(const char *run_dir, int iteration, double train_seconds, size_t gaussians,
+                               mgs_error *err);
+/* Training seconds recorded for `iteration` in RUN/saves.csv (its last line for that
+ * iteration), or NaN when there is none. */
+double mgs_run_saved_seconds(const char *run_dir, int iteration);
 /* Largest N with RUN/point_cloud/iteration_N/point_cloud.ply, or -1. */
 int mgs_run_latest_iteration(const char *run_dir);
 /* One trainer per run folder (train/run_lock.c): creates RUN if needed and takes an

@@ -1,6 +1,7 @@
 /* The run folder in the reference 3DGS layout: cameras.json, cfg_args and
  * point_cloud/iteration_N/point_cloud.ply. */
 #include <dirent.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +54,46 @@ mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gauss
   free(dir);
   free(path);
   return st;
+}
+
+mgs_status mgs_run_record_save(const char *run_dir, int iteration, double train_seconds, size_t gaussians,
+                               mgs_error *err) {
+  char *path = mgs_path_join(run_dir, "saves.csv"), *old = NULL;
+  if (!path) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  size_t n = 0;
+  if (mgs_read_file(path, &old, &n, NULL) != MGS_OK) { old = NULL; n = 0; }
+  static const char header[] = "iteration,train_seconds,gaussians\n";
+  char line[128];
+  int l = snprintf(line, sizeof line, "%d,%.6f,%zu\n", iteration, train_seconds, gaussians);
+  size_t h = n ? 0 : strlen(header);
+  char *text = malloc(n + h + (size_t)l + 1);
+  mgs_status st;
+  if (!text) st = mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  else {
+    if (n) memcpy(text, old, n);
+    else memcpy(text, header, h);
+    memcpy(text + n + h, line, (size_t)l);
+    st = mgs_write_file_atomic(path, text, n + h + (size_t)l, err);
+  }
+  free(text); free(old); free(path);
+  return st;
+}
+
+double mgs_run_saved_seconds(const char *run_dir, int iteration) {
+  char *path = mgs_path_join(run_dir, "saves.csv"), *text = NULL;
+  size_t n = 0;
+  double s = NAN;
+  if (path && mgs_read_file(path, &text, &n, NULL) == MGS_OK) {
+    for (char *p = text; p && *p;) {
+      int it;
+      double sec;
+      if (sscanf(p, "%d,%lf", &it, &sec) == 2 && it == iteration && isfinite(sec)) s = sec;
+      p = strchr(p, '\n');
+      if (p) p++;
+    }
+  }
+  free(text); free(path);
+  return s;
 }
 
 int mgs_run_latest_iteration(const char *run_dir) {

@@ -74,7 +74,7 @@ mgs_status mgs_trainer_create(mgs_dataset *ds, const mgs_train_options *o, mgs_g
   if (st != MGS_OK) { mgs_trainer_destroy(t); return st; }
   t->grad = mgs_gaussians_create(init->n, init->sh_degree);
   t->adam = mgs_adam_create(init->n);
-  if (t->adam && o->sh_moments_bf16) mgs_adam_set_sh_rest_bf16(t->adam, 1);
+  if (t->adam && o->sh_moments_bf16) (void)mgs_adam_set_sh_rest_bf16(t->adam, 1, err); /* packing frees, never fails */
   t->raster = mgs_raster_create();
   t->perm_len = ds->n_views[MGS_SPLIT_TRAIN];
   t->perm = malloc(t->perm_len * sizeof(uint32_t));
@@ -177,7 +177,9 @@ void mgs_trainer_get_state(const mgs_trainer *t, size_t i, float *row) {
   for (int pass = 0; pass < 3; pass++)
     for (int k = 0; k < MGS_PARAM_COUNT; k++) {
       size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
-      memcpy(row, state_group(t, pass, k) + i * d, d * sizeof(float));
+      const float *src = state_group(t, pass, k);
+      if (src) memcpy(row, src + i * d, d * sizeof(float));
+      else memset(row, 0, d * sizeof(float)); /* packed SH-rest moments: v is in m's words */
       row += d;
     }
 }
@@ -186,7 +188,8 @@ void mgs_trainer_set_state(mgs_trainer *t, size_t i, const float *row) {
   for (int pass = 0; pass < 3; pass++)
     for (int k = 0; k < MGS_PARAM_COUNT; k++) {
       size_t d = (size_t)mgs_param_dim((mgs_param_group)k);
-      memcpy(state_group(t, pass, k) + i * d, row, d * sizeof(float));
+      float *dst = state_group(t, pass, k);
+      if (dst) memcpy(dst + i * d, row, d * sizeof(float));
       row += d;
     }
 }

@@ -1,7 +1,8 @@
 /* morsegs experiment end to end on a tiny built-in scene (sphere, 8 views of 48x48, 700
- * iterations, 2 seeds, one knob-sweep run, a variant train rejects): killed (SIGKILL) after
- * its first finished run and started again, it keeps that run untouched, leaves no training
- * process behind, and finishes with RESULTS.md, RESULTS.json, the CSVs, the plots and one
+ * iterations, 2 seeds, one knob-sweep run, a variant train rejects): killed (SIGKILL) half-way
+ * through its second run and started again, it keeps the finished run untouched, continues
+ * the interrupted one from its checkpoint (to the model an uninterrupted training gives),
+ * leaves no training process behind, and finishes with RESULTS.md, RESULTS.json, the CSVs, the plots and one
  * folder per run; the figures RESULTS.md shows for a run equal what `morsegs eval` reports
  * for it. The second invocation runs two runs at a time (--jobs 2). --plan lists the runs
  * and an estimate without creating the folder, and after the kill counts the finished run
@@ -112,21 +113,28 @@ int main(void) {
     execv(cli, args);
     _exit(127);
   }
-  char first[700], first_ply[700];
+  char first[700], first_ply[700], second_saves[700];
   snprintf(first, sizeof first, "%s/runs/ds/baseline/seed_0/result.json", out);
   snprintf(first_ply, sizeof first_ply, "%s/runs/ds/baseline/seed_0/point_cloud/iteration_700/point_cloud.ply", out);
+  /* killed half-way through the second run (after its save at 350) */
+  snprintf(second_saves, sizeof second_saves, "%s/runs/ds/baseline/seed_1/saves.csv", out);
   int waited = 0, status = 0, exited = 0;
-  while (!mgs_path_exists(first) && waited < 3000) {
+  while (!mgs_path_exists(second_saves) && waited < 15000) {
     if (waitpid(pid, &status, WNOHANG) == pid) { exited = 1; break; }
-    usleep(100000);
+    usleep(20000);
     waited++;
   }
   CHECK_MSG(!exited, "the experiment ended before it could be killed (status %d)", status);
-  CHECK(mgs_path_exists(first));
   if (!exited) { kill(pid, SIGKILL); waitpid(pid, &status, 0); }
-  char second_run[700];
+  CHECK(mgs_path_exists(first));
+  char second_run[700], second_args[700], second_ckpt[700], second_ply[700];
   snprintf(second_run, sizeof second_run, "%s/runs/ds/baseline/seed_1/result.json", out);
+  snprintf(second_args, sizeof second_args, "%s/runs/ds/baseline/seed_1/experiment_args", out);
+  snprintf(second_ckpt, sizeof second_ckpt, "%s/runs/ds/baseline/seed_1/checkpoint.mgsckpt", out);
+  snprintf(second_ply, sizeof second_ply, "%s/runs/ds/baseline/seed_1/point_cloud/iteration_700/point_cloud.ply", out);
   CHECK_MSG(!mgs_path_exists(second_run), "killed too late: the second run had finished");
+  CHECK_MSG(mgs_path_exists(second_ckpt), "the interrupted run left no checkpoint to continue from");
+  const double t_args = mtime(second_args);
   usleep(500000);
   CHECK_MSG(processes_with(out) == 0, "a child of the killed experiment is still running");
   char *before = NULL;
@@ -145,6 +153,33 @@ int main(void) {
   CHECK(mtime(first) == t_result && mtime(first_ply) == t_ply);
   mgs_read_file(log2, &l2, &n, NULL);
   CHECK_MSG(l2 && strstr(l2, "1 finished before"), "second log: %s", l2 ? l2 : "(none)");
+  /* the interrupted run continued from its checkpoint (its folder was not started again:
+     a new start rewrites experiment_args) and ends with the model an uninterrupted
+     training with the same command gives, byte for byte; its checkpoint is removed */
+  CHECK_MSG(t_args > 0 && mtime(second_args) == t_args, "the interrupted run was started again, not continued");
+  CHECK_MSG(!mgs_path_exists(second_ckpt), "a finished run kept its checkpoint");
+  {
+    char *argtext = NULL, fresh[600], tcmd[8192] = "";
+    snprintf(fresh, sizeof fresh, "%s/fresh", tmp);
+    mgs_read_file(second_args, &argtext, &n, NULL);
+    CHECK(argtext != NULL);
+    int k = 0, next_is_out = 0;
+    for (char *tok = argtext ? strtok(argtext, "\n") : NULL; tok; tok = strtok(NULL, "\n"), k++) {
+      if (k < 2) continue; /* "morsegs train" */
+      size_t l = strlen(tcmd);
+      snprintf(tcmd + l, sizeof tcmd - l, " '%s'", next_is_out ? fresh : tok);
+      next_is_out = !strcmp(tok, "-o");
+    }
+    free(argtext);
+    CHECK(mgs_test_sh("'%s' train%s --force > /dev/null 2>&1", cli, tcmd) == 0);
+    char fresh_ply[700], *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    snprintf(fresh_ply, sizeof fresh_ply, "%s/point_cloud/iteration_700/point_cloud.ply", fresh);
+    mgs_read_file(second_ply, &a, &na, NULL);
+    mgs_read_file(fresh_ply, &b, &nb, NULL);
+    CHECK_MSG(a && b && na == nb && !memcmp(a, b, na), "the continued run's model differs from an uninterrupted one (%zu / %zu bytes)", na, nb);
+    free(a); free(b);
+  }
   CHECK(l2 && strstr(l2, "bogus") && strstr(l2, "not available"));
   /* outputs: one folder per run, the report, the curves */
   static const char *files[] = {"RESULTS.md", "RESULTS.json", "curves.csv", "h3.csv", "experiment.json",

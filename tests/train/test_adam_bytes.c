@@ -30,7 +30,7 @@ static void test_adam_bytes(void) {
   mgs_adam_bytes(a, 4, (1u << MGS_PARAM_MEAN) | (1u << MGS_PARAM_OPACITY), 0, 0, &rd, &wr);
   CHECK_NEAR(wr, 4 * 4 * 12, 0);
   a->sh_rest_active = 15;
-  mgs_adam_set_sh_rest_bf16(a, 1);
+  CHECK(mgs_adam_set_sh_rest_bf16(a, 1, NULL) == MGS_OK);
   mgs_adam_bytes(a, 10, all, 0, 0, &rd, &wr); /* 45 floats: 4-byte word for m and v */
   CHECK_NEAR(rd, 10 * (14 * 12 + 45 * 8), 0);
   CHECK_NEAR(wr, 10 * (14 * 12 + 45 * 8), 0);
@@ -45,7 +45,7 @@ static void test_bf16_moments(void) {
   size_t first;
   CHECK(mgs_gaussians_append(ga, n, &first, NULL) == MGS_OK && mgs_gaussians_append(gb, n, &first, NULL) == MGS_OK &&
         mgs_gaussians_append(gr, n, &first, NULL) == MGS_OK);
-  mgs_adam_set_sh_rest_bf16(b, 1);
+  CHECK(mgs_adam_set_sh_rest_bf16(b, 1, NULL) == MGS_OK);
   for (int k = 0; k < MGS_PARAM_COUNT; k++) a->lr[k] = b->lr[k] = 1e-3f;
   mgs_rng rng;
   mgs_rng_init(&rng, 5, 1);
@@ -75,11 +75,11 @@ static void test_bf16_moments(void) {
      rounding to nearest would keep it (a 0.1 % change is below half a bf16 ulp) */
   for (size_t i = 0; i < n * 45; i++) gr->sh_rest[i] = 0;
   double v0 = 0, v1 = 0;
-  mgs_adam_set_sh_rest_bf16(b, 0);
+  CHECK(mgs_adam_set_sh_rest_bf16(b, 0, NULL) == MGS_OK);
   for (size_t i = 0; i < n * 45; i++) v0 += b->v[MGS_PARAM_SH_REST][i];
-  mgs_adam_set_sh_rest_bf16(b, 1);
+  CHECK(mgs_adam_set_sh_rest_bf16(b, 1, NULL) == MGS_OK);
   for (int step = 0; step < 2000; step++) CHECK_OK(mgs_adam_step(b, gb, gr, rest, &err), &err);
-  mgs_adam_set_sh_rest_bf16(b, 0);
+  CHECK(mgs_adam_set_sh_rest_bf16(b, 0, NULL) == MGS_OK);
   for (size_t i = 0; i < n * 45; i++) v1 += b->v[MGS_PARAM_SH_REST][i];
   fprintf(stderr, "  v after 2000 zero-gradient steps: %.4f of before (0.999^2000 = %.4f)\n", v1 / v0, pow(0.999, 2000));
   CHECK(v0 > 0 && fabs(v1 / v0 / pow(0.999, 2000) - 1) < 0.02);
@@ -87,7 +87,38 @@ static void test_bf16_moments(void) {
   mgs_gaussians_destroy(ga); mgs_gaussians_destroy(gb); mgs_gaussians_destroy(gr);
 }
 
+/* Packed, the SH-rest v array is gone (the memory the option saves), and the row
+ * operations carry the packed words: append adds zero words, compact keeps the kept rows'
+ * words in order, reset zeroes them; unpacking gives the moments back. */
+static void test_bf16_frees_v(void) {
+  mgs_adam *a = mgs_adam_create(4);
+  mgs_error err;
+  for (size_t i = 0; i < 4 * 45; i++) { a->m[MGS_PARAM_SH_REST][i] = (float)(i + 1); a->v[MGS_PARAM_SH_REST][i] = 0.5f * (float)(i + 1); }
+  CHECK_OK(mgs_adam_set_sh_rest_bf16(a, 1, &err), &err);
+  CHECK(a->v[MGS_PARAM_SH_REST] == NULL && a->v[MGS_PARAM_MEAN] != NULL);
+  CHECK_OK(mgs_adam_append(a, 1000, &err), &err); /* grows past the capacity */
+  CHECK(a->n == 1004 && a->v[MGS_PARAM_SH_REST] == NULL);
+  const uint32_t *w = (const uint32_t *)(const void *)a->m[MGS_PARAM_SH_REST];
+  CHECK(w[1003 * 45 + 44] == 0);
+  uint8_t *keep = calloc(1004, 1);
+  keep[1] = keep[3] = keep[1003] = 1;
+  mgs_adam_compact(a, keep);
+  free(keep);
+  CHECK(a->n == 3);
+  CHECK_OK(mgs_adam_set_sh_rest_bf16(a, 0, &err), &err);
+  CHECK(a->v[MGS_PARAM_SH_REST] != NULL);
+  /* row 1 and row 3 of the original, exactly (small integers are exact in bfloat16) */
+  CHECK(a->m[MGS_PARAM_SH_REST][0] == 46.0f && a->v[MGS_PARAM_SH_REST][0] == 23.0f);
+  CHECK(a->m[MGS_PARAM_SH_REST][45] == 136.0f && a->v[MGS_PARAM_SH_REST][45] == 68.0f);
+  CHECK(a->m[MGS_PARAM_SH_REST][90] == 0.0f && a->v[MGS_PARAM_SH_REST][90] == 0.0f);
+  CHECK_OK(mgs_adam_set_sh_rest_bf16(a, 1, &err), &err);
+  mgs_adam_reset_group(a, MGS_PARAM_SH_REST);
+  CHECK(w != NULL && ((const uint32_t *)(const void *)a->m[MGS_PARAM_SH_REST])[45] == 0);
+  mgs_adam_destroy(a);
+}
+
 int main(void) {
+  RUN(test_bf16_frees_v);
   RUN(test_adam_bytes);
   RUN(test_bf16_moments);
   return mgs_test_finish();

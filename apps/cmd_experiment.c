@@ -398,7 +398,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   out->seed = it->seed;
   out->factor = it->factor;
   out->iters = e->iters;
-  out->train_seconds = out->analysis_seconds = NAN;
+  out->train_seconds = out->analysis_seconds = out->train_cpu_seconds = NAN;
   {
     char *sp = mgs_path_join(it->dir, "train_stats.json"), *text = NULL;
     size_t n;
@@ -408,6 +408,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
       const cJSON *t = cJSON_GetObjectItem(j, "train_seconds"), *an = cJSON_GetObjectItem(j, "morse_analysis_seconds");
       if (cJSON_IsNumber(t)) out->train_seconds = t->valuedouble;
       if (cJSON_IsNumber(an)) out->analysis_seconds = an->valuedouble;
+      const cJSON *cpu = cJSON_GetObjectItem(j, "train_cpu_seconds");
+      if (cJSON_IsNumber(cpu)) out->train_cpu_seconds = cpu->valuedouble;
       cJSON_Delete(j);
     }
     free(text);

@@ -754,6 +754,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       cJSON_AddItemToObject(o, "betti_persistent", cJSON_CreateIntArray(p->betti_persistent, 3));
       add_num(o, "bottleneck", p->bottleneck);
       add_num(o, "train_seconds", r->train_seconds);
+      add_num(o, "train_cpu_seconds", r->train_cpu_seconds);
       add_num(o, "analysis_seconds", r->analysis_seconds);
       cJSON_AddItemToArray(jr, o);
     }
@@ -881,6 +882,7 @@ static mgs_status read_curves(const char *path, const char *keep, exp_run **runs
       run->factor = v[3];
       run->train_seconds = v[22];
       run->analysis_seconds = v[23];
+      run->train_cpu_seconds = run->run_seconds = NAN; /* not in curves.csv */
     }
     if (run->n_points == EXP_MAX_POINTS) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: more than %d points in one run", path, line_no, EXP_MAX_POINTS); break; }
     exp_point *p = &run->pt[run->n_points++];

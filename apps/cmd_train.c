@@ -91,6 +91,9 @@ static mgs_status write_stats(const char *run, const mgs_train_setup *su, mgs_er
   }
   cJSON_AddNumberToObject(o, "iterations", mgs_trainer_iteration(t));
   cJSON_AddNumberToObject(o, "train_seconds", mgs_trainer_seconds(t));
+  /* CPU seconds of the training steps (null after a resume from an older checkpoint):
+     comparable between runs on a loaded machine, where wall seconds are not */
+  cJSON_AddNumberToObject(o, "train_cpu_seconds", mgs_trainer_cpu_seconds(t));
   cJSON_AddNumberToObject(o, "gaussians", (double)mgs_trainer_model(t)->n);
   cJSON_AddNumberToObject(o, "final_loss", mgs_trainer_last_loss(t));
   cJSON_AddNumberToObject(o, "peak_rss_mb", (double)mgs_peak_rss() / (1024.0 * 1024.0));
@@ -238,7 +241,8 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
     if (at < mgs_trainer_model_iteration(t) && i < n_saves) continue;
     st = mgs_trainer_run_to(t, at, &err);
     if (st == MGS_OK && i < n_saves) st = mgs_run_write_ply(run, at, mgs_trainer_model(t), &err);
-    if (st == MGS_OK && i < n_saves) st = mgs_run_record_save(run, at, mgs_trainer_seconds(t), mgs_trainer_model(t)->n, &err);
+    if (st == MGS_OK && i < n_saves) st = mgs_run_record_save(run, at, mgs_trainer_seconds(t), mgs_trainer_model(t)->n,
+                                                        mgs_trainer_cpu_seconds(t), &err);
   }
   sigaction(SIGINT, &old, NULL);
   if (st == MGS_ERR_INTERRUPTED) {
@@ -252,7 +256,8 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
   }
   if (st) goto done;
   if ((st = mgs_run_write_ply(run, mgs_trainer_iteration(t), mgs_trainer_model(t), &err))) goto done;
-  if ((st = mgs_run_record_save(run, mgs_trainer_iteration(t), mgs_trainer_seconds(t), mgs_trainer_model(t)->n, &err))) goto done;
+  if ((st = mgs_run_record_save(run, mgs_trainer_iteration(t), mgs_trainer_seconds(t), mgs_trainer_model(t)->n,
+                                 mgs_trainer_cpu_seconds(t), &err))) goto done;
   if ((st = write_stats(run, &su, &err))) goto done;
   if (su.morse) {
     if ((st = mgs_morse_ctx_flush_csv(su.morse, &err))) goto done;

@@ -29,6 +29,9 @@ void mgs_progress_destroy(mgs_progress *p); /* finishes the line */
 
 /* Wall clock in seconds (monotonic). */
 double mgs_now(void);
+/* CPU time of this process (all its threads) in seconds: what a run costs on a machine
+ * whose other load inflates wall times. */
+double mgs_cpu_now(void);
 /* Peak resident set size of this process in bytes (0 if unknown). */
 size_t mgs_peak_rss(void);
 

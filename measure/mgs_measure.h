@@ -42,6 +42,7 @@ typedef struct exp_run {
   int iters;
   double train_seconds, analysis_seconds; /* analysis: NAN when the run does not report one */
   double run_seconds;          /* wall time of training, evaluations and measures (NAN in older records) */
+  double train_cpu_seconds;    /* CPU time of the training steps (NAN in older records) */
   int n_points;
   exp_point pt[EXP_MAX_POINTS];
 } exp_run;

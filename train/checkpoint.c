@@ -5,18 +5,19 @@
  * then the header fields below, the view order, the model's six groups, Adam's first and
  * second moments, the strategy's name (32 bytes) and its blob (u64 size + bytes), the
  * loss terms (version 2: u32 count, then per term its name (32 bytes) and blob), and a
- * scene origin (version 3: 3 f64, core/mgs_origin.h), and a final u64 FNV-1a checksum of
- * everything before it. Version 1 files (no terms) are read by runs without loss terms;
+ * scene origin (version 3: 3 f64, core/mgs_origin.h), the training CPU seconds (version 4:
+ * one f64), and a final u64 FNV-1a checksum of everything before it. Version 1 files (no terms) are read by runs without loss terms;
  * versions 1 and 2 (no origin) by runs whose dataset has the origin (0,0,0). A resume
  * whose dataset gives another origin (the folder changed) is refused. */
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "train/trainer_internal.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_origin.h"
 
-#define CKPT_VERSION 3u
+#define CKPT_VERSION 4u
 static const char CKPT_MAGIC[8] = {'M', 'G', 'S', 'C', 'K', 'P', 'T', 0};
 
 typedef struct {
@@ -131,6 +132,7 @@ mgs_status mgs_trainer_save_checkpoint(const mgs_trainer *t, const char *path, m
   hw(&w, tblob, tblob_len);
   free(tblob);
   hw(&w, t->ds->origin, 3 * sizeof(double));
+  hw(&w, &t->cpu_seconds, sizeof(double));
   uint64_t sum = w.h;
   if (w.ok && !(w.ok = fwrite(&sum, sizeof sum, 1, f) == 1)) w.errnum = errno;
   if (!w.ok) {
@@ -166,11 +168,16 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   ckpt_header h;
   if (!rd(&r, &ver, 4) || !rd(&r, &bom, 4)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   if (bom != 0x01020304u) FAIL(MGS_ERR_FORMAT, "%s: checkpoint written on a machine of another byte order", path);
-  if (ver != CKPT_VERSION && ver != 2u && !(ver == 1u && t->n_terms == 0)) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
+  if (ver != CKPT_VERSION && ver != 3u && ver != 2u && !(ver == 1u && t->n_terms == 0)) FAIL(MGS_ERR_UNSUPPORTED, "%s: checkpoint version %u, this build reads %u", path, ver, CKPT_VERSION);
   if (!rd(&r, &h, sizeof h)) FAIL(MGS_ERR_FORMAT, "%s: checkpoint header truncated", path);
   /* the scene origin (the last record, before the checksum) first: nothing is replaced
      when the dataset now gives another one */
-  double origin[3] = {0, 0, 0};
+  double origin[3] = {0, 0, 0}, cpu = NAN;
+  if (ver >= 4u) {
+    if (r.left < sizeof cpu) FAIL(MGS_ERR_FORMAT, "%s: checkpoint truncated (CPU seconds)", path);
+    memcpy(&cpu, r.p + r.left - sizeof cpu, sizeof cpu);
+    r.left -= sizeof cpu;
+  }
   if (ver >= 3u) {
     if (r.left < sizeof origin) FAIL(MGS_ERR_FORMAT, "%s: checkpoint truncated (scene origin)", path);
     memcpy(origin, r.p + r.left - sizeof origin, sizeof origin);
@@ -252,6 +259,7 @@ mgs_status mgs_trainer_load_checkpoint(mgs_trainer *t, const char *path, mgs_err
   t->active_sh = h.active_sh;
   t->rng.state = h.rng_state; t->rng.inc = h.rng_inc;
   t->seconds = h.seconds; t->ema_loss = h.ema_loss; t->ema_psnr = h.ema_psnr;
+  t->cpu_seconds = cpu;
   for (int k = 0; k < MGS_PARAM_COUNT; k++) t->adam->t[k] = h.adam_t[k];
   free(data);
   mgs_trainer_large_invalidate(t); /* the tiles bound the old model */

@@ -268,6 +268,9 @@ size_t mgs_trainer_state_floats(const mgs_trainer *t);
 void mgs_trainer_get_state(const mgs_trainer *t, size_t i, float *row);
 void mgs_trainer_set_state(mgs_trainer *t, size_t i, const float *row);
 double mgs_trainer_seconds(const mgs_trainer *t);  /* training wall time so far */
+/* Training CPU time so far (the process' threads, over the training steps only); NAN after
+ * a resume from a checkpoint older than version 4. */
+double mgs_trainer_cpu_seconds(const mgs_trainer *t);
 double mgs_trainer_last_loss(const mgs_trainer *t);
 /* The learning rate the last iteration used for a parameter group. */
 double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group);
@@ -304,12 +307,12 @@ mgs_status mgs_run_write_cameras(const char *run_dir, const mgs_dataset *ds, mgs
 /* RUN/point_cloud/iteration_N/point_cloud.ply (world coordinates: g->origin added, see
  * mgs_ply_write_gaussians) */
 mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gaussians *g, mgs_error *err);
-/* Appends "iteration,train_seconds,gaussians" to RUN/saves.csv (header first when new):
- * the training time at each saved model, which survives a kill and a --resume (file
+/* Appends "iteration,train_seconds,gaussians,train_cpu_seconds" to RUN/saves.csv (header
+ * first when new): the training wall and CPU time at each saved model, which survives a kill and a --resume (file
  * times of the .ply files do not). Rewritten whole through a temp file, so a kill never
  * leaves a half line. */
 mgs_status mgs_run_record_save(const char *run_dir, int iteration, double train_seconds, size_t gaussians,
-                               mgs_error *err);
+                               double train_cpu_seconds, mgs_error *err);
 /* Training seconds recorded for `iteration` in RUN/saves.csv (its last line for that
  * iteration), or NaN when there is none. */
 double mgs_run_saved_seconds(const char *run_dir, int iteration);

@@ -57,14 +57,14 @@ mgs_status mgs_run_write_ply(const char *run_dir, int iteration, const mgs_gauss
 }
 
 mgs_status mgs_run_record_save(const char *run_dir, int iteration, double train_seconds, size_t gaussians,
-                               mgs_error *err) {
+                               double train_cpu_seconds, mgs_error *err) {
   char *path = mgs_path_join(run_dir, "saves.csv"), *old = NULL;
   if (!path) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
   size_t n = 0;
   if (mgs_read_file(path, &old, &n, NULL) != MGS_OK) { old = NULL; n = 0; }
-  static const char header[] = "iteration,train_seconds,gaussians\n";
-  char line[128];
-  int l = snprintf(line, sizeof line, "%d,%.6f,%zu\n", iteration, train_seconds, gaussians);
+  static const char header[] = "iteration,train_seconds,gaussians,train_cpu_seconds\n";
+  char line[160];
+  int l = snprintf(line, sizeof line, "%d,%.6f,%zu,%.6f\n", iteration, train_seconds, gaussians, train_cpu_seconds);
   size_t h = n ? 0 : strlen(header);
   char *text = malloc(n + h + (size_t)l + 1);
   mgs_status st;

@@ -194,6 +194,7 @@ void mgs_trainer_set_state(mgs_trainer *t, size_t i, const float *row) {
     }
 }
 double mgs_trainer_seconds(const mgs_trainer *t) { return t->seconds; }
+double mgs_trainer_cpu_seconds(const mgs_trainer *t) { return t->cpu_seconds; }
 double mgs_trainer_last_loss(const mgs_trainer *t) { return t->last_loss; }
 double mgs_trainer_learning_rate(const mgs_trainer *t, mgs_param_group group) { return t->adam->lr[group]; }
 void mgs_trainer_phase_seconds(const mgs_trainer *t, double out[MGS_TRAIN_PHASES]) {
@@ -271,7 +272,7 @@ static mgs_status numeric_stop(mgs_trainer *t, int it, const char *what, mgs_err
 mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   const mgs_train_options *o = &t->o;
   int it = t->iteration + 1;
-  double t0 = mgs_now();
+  double t0 = mgs_now(), c0 = mgs_cpu_now();
   double ext = t->ds->extent > 0 ? t->ds->extent : 1.0;
   int64_t lr_steps = o->lr_mean_max_steps > 0 ? o->lr_mean_max_steps : o->iterations;
   int lr_it = it, sh_max = o->sh_degree;
@@ -365,6 +366,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   if (!step_opt && !use_strategy) { /* nothing reads a gradient in this iteration */
     t->iteration = it;
     t->seconds += mgs_now() - t0;
+    t->cpu_seconds += mgs_cpu_now() - c0;
     return MGS_OK;
   }
   if (use_strategy && t->strategy->ops->pre_backward && (st = t->strategy->ops->pre_backward(t->strategy->self, &ss, err)))
@@ -420,6 +422,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   double t5 = mgs_now();
   t->phase_s[MGS_PHASE_ADAM] += t5 - t4;
   t->seconds += t5 - t0;
+  t->cpu_seconds += mgs_cpu_now() - c0;
   return MGS_OK;
 }
 

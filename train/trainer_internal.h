@@ -34,6 +34,7 @@ struct mgs_trainer {
   mgs_gaussians *tgrad;         /* model terms' gradients when they join the fused step */
   size_t tgrad_clean_n;         /* rows of tgrad known zero (the fused step clears what it reads) */
   double seconds;               /* training wall time */
+  double cpu_seconds;           /* training CPU time of the process (NAN: resumed from a checkpoint without it) */
   double ema_loss, ema_psnr;    /* the reference's 0.4/0.6 moving average */
   double last_loss;
   double phase_s[MGS_TRAIN_PHASES]; /* seconds per phase, see mgs_trainer_phase_seconds */

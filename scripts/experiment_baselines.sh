@@ -9,14 +9,16 @@
 #   sugar, gaussianpro                                 the other two baselines
 # SuGaR and GaussianPro (no MorseGS variant sits on them) with SEEDS_OTHER (3) seeds.
 # H3's Pareto fronts: baseline and mini-splatting swept (--grad-threshold ×{0.25,0.5,2,4}).
-# Resumable (finished runs are kept). Cost (2026-11-25, 2-core machine): a 7500-iteration
-# 200² 3DGS run is ~5 CPU-minutes plus ~3 for its evaluations, 2DGS ~3× the training, so the
-# default plan (5 scenes × (7 variants × 5 seeds + 2 × 3 seeds) + 2 × 4 × 5 × 5 sweep runs =
-# 405 runs) is about two CPU-days (PLAN=1 prints the estimate): run it where there are
-# cores, or across nights; runs go seed by seed over every scene, so a run stopped early
-# has every scene and variant with its first seeds.
+# Resumable: finished runs are kept and a run cut off continues from its checkpoint (a
+# session's processes end when it stops). Cost (2-core machine): a 7500-iteration 200² 3DGS
+# run is ~5 CPU-minutes plus ~1.5 for its EVALS (2) evaluation points, 2DGS ~3× the
+# training, so the default plan (5 scenes × (7 variants × 5 seeds + 2 × 3 seeds) + 2 × 4 × 5
+# scenes × 3 sweep seeds = 325 runs) is about 39 CPU-hours (PLAN=1 prints the estimate):
+# run it where there are cores, or over several sessions; the proposal's baselines come
+# first in each seed and runs go seed by seed over every scene, so a run stopped early has
+# every scene and variant with its first seeds.
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
-# RES, ITERS, SCALE, SEEDS, EVALS, VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
+# RES, ITERS, SCALE, SEEDS, EVALS (2), VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
 # SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), MORSEGS (a frozen binary for a run spread over days),
 # MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
 # runs and the estimated time, train nothing).
@@ -27,7 +29,7 @@ M=${MORSEGS:-build/apps/morsegs}
 [ -x "$M" ] || { echo "experiment_baselines.sh: $M not found: run scripts/build.sh build first" >&2; exit 2; }
 hinge=/usr/share/doc/netgen/examples/hinge.stl
 lever=/usr/share/doc/gmsh-doc/converters/stl_to_cartesian/lever.stl.gz
-RES=${RES:-200}; ITERS=${ITERS:-7500}; SCALE=${SCALE:-0.25}; SEEDS=${SEEDS:-5}; EVALS=${EVALS:-4}
+RES=${RES:-200}; ITERS=${ITERS:-7500}; SCALE=${SCALE:-0.25}; SEEDS=${SEEDS:-5}; EVALS=${EVALS:-2}
 SCENES=${SCENES:-sphere genus2 thin hinge lever}
 S="--views ${VIEWS:-60} --test-views ${TEST_VIEWS:-20} --width $RES --height $RES"
 mkdir -p "$dir/scenes"

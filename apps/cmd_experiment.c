@@ -419,10 +419,26 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   char fin_ply[PATH_MAX + 64];
   snprintf(fin_ply, sizeof fin_ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, e->iters);
   const double t_final = mtime_of(fin_ply);
+  /* SuGaR's surface is its mesh: made from the final model before the final evaluation
+     point, which then reports it (geometry.sugar) */
+  int sugar = 0;
+  for (int k = 0; vs->def->args[k] && vs->def->args[k + 1]; k++)
+    sugar |= !strcmp(vs->def->args[k], "--preset") && !strcmp(vs->def->args[k + 1], "sugar");
   /* evaluation points */
   for (int k = 0; k < e->n_evals; k++) {
     int iter = e->evals[k];
     if (it->sweep && iter != e->iters) continue;
+    if (sugar && iter == e->iters) {
+      const char *mv[] = {"morsegs", "vdb", it->dir, "--sugar-mesh", NULL};
+      rc = run_child((char *const *)mv, elog);
+      if (g_stop || rc == 130) { result = 3; goto done; }
+      if (rc != 0) {
+        log_reason(elog, reason, reason_n);
+        if (!reason[0]) snprintf(reason, reason_n, "morsegs vdb --sugar-mesh exited with code %d (see %s)", rc, elog);
+        result = 1;
+        goto done;
+      }
+    }
     char ply[PATH_MAX + 64];
     snprintf(ply, sizeof ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, iter);
     if (!mgs_path_exists(ply)) continue;
@@ -449,6 +465,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     p->iteration = iter;
     const double m0 = mgs_now();
     if (exp_read_eval(it->dir, iter, p, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; goto done; }
+    if (iter != e->iters) p->chamfer_mesh = p->fscore_mesh = NAN; /* a mesh left by an interrupted evaluation is the final model's */
     /* keep eval's own record of this point beside the run */
     {
       char *rp = mgs_path_join(it->dir, "results.json"), *text = NULL, name[64];

@@ -11,7 +11,7 @@
  *     interval: yes = wholly beyond the target (H1 −30 %, H2 −90 %, H3 −40 %, H4 +0.5 dB,
  *     SSIM +0.01), partly = beyond 0 in the right direction, worse = beyond 0 in the wrong
  *     one, no = contains 0, n/a = fewer than 2 seeds with a measurement (reason given);
- *   - Holm's correction within each hypothesis' family (H1; H2 count and visible mass; H3;
+ *   - Holm's correction within each hypothesis' family (H1 α-surface and depth-fused; H2 count and visible mass; H3;
  *     H4 PSNR and SSIM) over every dataset and variant: the Holm word is "no" unless Holm
  *     rejects the cell, else the word of the interval at the level Holm tested it at
  *     (stats/paired.c). Both words are printed, with the interval and the adjusted p.
@@ -33,7 +33,7 @@
 #define EXP_BOOT 4000       /* bootstrap resamples (JSON only) */
 #define EXP_BASE "baseline" /* what a variant is measured against unless --base names another */
 
-typedef enum measure { M_CHAMFER, M_FLOATERS, M_FLOATER_MASS, M_GAUSSIANS, M_PSNR, M_SSIM } measure;
+typedef enum measure { M_CHAMFER, M_CHAMFER_FUSED, M_FLOATERS, M_FLOATER_MASS, M_GAUSSIANS, M_PSNR, M_SSIM } measure;
 
 typedef struct hyp_def {
   const char *key, *family, *title;
@@ -47,7 +47,9 @@ typedef struct hyp_def {
 } hyp_def;
 
 static const hyp_def HYPS[] = {
-  {"H1", "H1", "H1 Chamfer", M_CHAMFER, -1, -30, MGS_STATS_LOG_RATIO, 0, 0, "%"},
+  {"H1", "H1", "H1 Chamfer (α-surface)", M_CHAMFER, -1, -30, MGS_STATS_LOG_RATIO, 0, 0, "%"},
+  /* the field's protocol: the surface fused from rendered depth (morsegs vdb RUN) */
+  {"H1_fused", "H1", "H1 Chamfer (depth-fused surface)", M_CHAMFER_FUSED, -1, -30, MGS_STATS_LOG_RATIO, 0, 0, "%"},
   {"H2", "H2", "H2 floaters (seed's count)", M_FLOATERS, -1, -90, MGS_STATS_LOG_RATIO, 1, 0, "%"},
   {"H2_visible", "H2", "H2 floaters (visible mass)", M_FLOATER_MASS, -1, -90, MGS_STATS_LOG_RATIO, 0, 0, "%"},
   {"H3", "H3", "H3 Gaussians at equal PSNR (Pareto front)", M_GAUSSIANS, -1, -40, MGS_STATS_LOG_RATIO, 0, 1, "%"},
@@ -89,6 +91,7 @@ static double metric(const exp_run *r, measure m) {
   if (!p) return NAN;
   switch (m) {
     case M_CHAMFER: return p->chamfer;
+    case M_CHAMFER_FUSED: return p->chamfer_fused;
     case M_FLOATERS: return p->floaters;
     case M_FLOATER_MASS: return p->floater_mass;
     case M_GAUSSIANS: return p->gaussians;
@@ -305,16 +308,17 @@ static mgs_status write_csvs(const exp_report_in *in, mgs_error *err) {
   if (st) return st;
   fprintf(f, "dataset,variant,seed,knob_factor,iteration,wall_seconds,psnr,ssim,gaussians,chamfer,fscore,floaters,"
              "floaters_fraction,floater_mass,floater_mass_fraction,betti0,betti1,betti2,pbetti0,pbetti1,pbetti2,"
-             "bottleneck,train_seconds,analysis_seconds\n");
+             "bottleneck,train_seconds,analysis_seconds,chamfer_fused,fscore_fused,chamfer_mesh,fscore_mesh\n");
   for (size_t i = 0; i < in->n_runs; i++) {
     const exp_run *r = &in->runs[i];
     for (int k = 0; k < r->n_points; k++) {
       const exp_point *q = &r->pt[k];
-      fprintf(f, "%s,%s,%d,%g,%d,%.6g,%.6g,%.6g,%.0f,%.9g,%.6g,%.0f,%.6g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6g\n",
+      fprintf(f, "%s,%s,%d,%g,%d,%.6g,%.6g,%.6g,%.0f,%.9g,%.6g,%.0f,%.6g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.9g,%.6g,%.9g,%.6g\n",
               r->dataset, r->variant, r->seed, r->factor, q->iteration, q->wall_seconds, q->psnr, q->ssim, q->gaussians,
               q->chamfer, q->fscore, q->floaters, q->floaters_fraction, q->floater_mass, q->floater_mass_fraction,
               q->betti[0], q->betti[1], q->betti[2], q->betti_persistent[0], q->betti_persistent[1],
-              q->betti_persistent[2], q->bottleneck, r->train_seconds, r->analysis_seconds);
+              q->betti_persistent[2], q->bottleneck, r->train_seconds, r->analysis_seconds, q->chamfer_fused, q->fscore_fused,
+              q->chamfer_mesh, q->fscore_mesh);
     }
   }
   if ((st = mgs_atomic_commit(af, err))) return st;
@@ -336,7 +340,7 @@ static mgs_status write_csvs(const exp_report_in *in, mgs_error *err) {
 /* One row of the runs table: the final point's figures in the formats `morsegs eval` prints. */
 static void run_row(FILE *f, const exp_run *r) {
   const exp_point *p = final_pt(r);
-  char ch[32], fs[32], fl[32], ms[48], bn[32], an[32], b1[32], b2[32];
+  char ch[32], fs[32], fl[32], ms[48], bn[32], an[32], b1[32], b2[32], cf[32], ff[32], cm[32];
   fmt_or_na(ch, sizeof ch, "%.6g", p->chamfer);
   fmt_or_na(fs, sizeof fs, "%.4f", p->fscore);
   fmt_or_na(fl, sizeof fl, "%.0f", p->floaters);
@@ -346,8 +350,12 @@ static void run_row(FILE *f, const exp_run *r) {
   fmt_or_na(an, sizeof an, "%.1f", r->analysis_seconds);
   fmt_betti(b1, sizeof b1, p->betti);
   fmt_betti(b2, sizeof b2, p->betti_persistent);
-  fprintf(f, "| %s | %s | %d | %d | %.3f | %.4f | %.0f | %s | %s | %s | %s | %s | %s | %s | %.1f | %s |\n", r->dataset,
-          r->variant, r->seed, p->iteration, p->psnr, p->ssim, p->gaussians, ch, fs, fl, ms, b1, b2, bn, r->train_seconds, an);
+  fmt_or_na(cf, sizeof cf, "%.6g", p->chamfer_fused);
+  fmt_or_na(ff, sizeof ff, "%.4f", p->fscore_fused);
+  fmt_or_na(cm, sizeof cm, "%.6g", p->chamfer_mesh);
+  fprintf(f, "| %s | %s | %d | %d | %.3f | %.4f | %.0f | %s | %s | %s | %s | %s | %s | %s | %.1f | %s | %s | %s | %s |\n", r->dataset,
+          r->variant, r->seed, p->iteration, p->psnr, p->ssim, p->gaussians, ch, fs, fl, ms, b1, b2, bn, r->train_seconds, an,
+          cf, ff, cm);
 }
 
 /* "−12.3 % [−20.1, −4.0]" (log-ratios shown as %), "+0.12 dB [...]", "n/a". */
@@ -616,7 +624,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     "from the interval: **yes** = wholly beyond the target (H1 -30 %%, H2 -90 %%, H3 -40 %%, H4 +0.5 dB PSNR, +0.01 SSIM); "
     "**partly** = beyond 0 in the right direction only; **worse** = beyond 0 in the wrong direction; **no** = contains 0; "
     "**n/a** = fewer than 2 seeds with a measurement (the reason is given).\n"
-    "- Multiple comparisons: Holm's step-down correction within each hypothesis' family (H1; H2 count and visible mass; "
+    "- Multiple comparisons: Holm's step-down correction within each hypothesis' family (H1 α-surface and depth-fused; H2 count and visible mass; "
     "H3; H4 PSNR and SSIM), over every dataset and variant. The Holm word is **no** unless Holm rejects the cell (adjusted "
     "p < 0.05); then it is the word of the wider interval at the level Holm tested that cell at, 1 - 0.05/(m - k + 1) for "
     "the k-th smallest of m p-values (it then excludes 0). Both words are printed; the Holm word is the one to quote.\n"
@@ -730,8 +738,9 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
     /* the runs */
     fprintf(f, "\n### Runs (final evaluation point; figures as `morsegs eval` reports them)\n\n"
                "| dataset | variant | seed | iteration | PSNR | SSIM | Gaussians | Chamfer | F-score | floaters (H2) | visible "
-               "floater mass | Betti | persistent Betti | bottleneck | train s | analysis s |\n"
-               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+               "floater mass | Betti | persistent Betti | bottleneck | train s | analysis s | fused Chamfer | fused F-score "
+               "| SuGaR mesh Chamfer |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     cJSON *jr = cJSON_AddArrayToObject(od, "runs");
     for (size_t i = 0; i < in->n_runs; i++) {
       const exp_run *r = &in->runs[i];
@@ -747,6 +756,10 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       add_num(o, "gaussians", p->gaussians);
       add_num(o, "chamfer", p->chamfer);
       add_num(o, "fscore", p->fscore);
+      add_num(o, "chamfer_fused", p->chamfer_fused);
+      add_num(o, "fscore_fused", p->fscore_fused);
+      add_num(o, "chamfer_mesh", p->chamfer_mesh);
+      add_num(o, "fscore_mesh", p->fscore_mesh);
       add_num(o, "floaters", p->floaters);
       add_num(o, "floater_mass", p->floater_mass);
       add_num(o, "floater_mass_fraction", p->floater_mass_fraction);
@@ -820,6 +833,8 @@ static const char CURVES_HEADER[] =
   "dataset,variant,seed,knob_factor,iteration,wall_seconds,psnr,ssim,gaussians,chamfer,fscore,floaters,"
   "floaters_fraction,floater_mass,floater_mass_fraction,betti0,betti1,betti2,pbetti0,pbetti1,pbetti2,"
   "bottleneck,train_seconds,analysis_seconds";
+/* since session 6: the depth-fused surface and SuGaR's mesh (older files have 24 fields) */
+static const char CURVES_HEADER_MORE[] = ",chamfer_fused,fscore_fused,chamfer_mesh,fscore_mesh";
 
 static int in_list(const char *csv, const char *name) {
   size_t l = strlen(name);
@@ -842,22 +857,25 @@ static mgs_status read_curves(const char *path, const char *keep, exp_run **runs
   if (st) return st;
   size_t cap = 0, n = 0;
   exp_run *r = NULL;
-  int line_no = 0;
+  int line_no = 0, nf = 24;
   char *save = NULL;
   for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
     line_no++;
     line[strcspn(line, "\r")] = 0;
     if (line_no == 1) {
-      if (strcmp(line, CURVES_HEADER)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a curves.csv of morsegs experiment (header)", path); break; }
+      const size_t hl = strlen(CURVES_HEADER);
+      if (!strncmp(line, CURVES_HEADER, hl) && !strcmp(line + hl, CURVES_HEADER_MORE)) nf = 28;
+      else if (strcmp(line, CURVES_HEADER)) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: not a curves.csv of morsegs experiment (header)", path); break; }
       continue;
     }
-    char *f[24], *sv = NULL;
+    char *f[28], *sv = NULL;
     int k = 0;
-    for (char *t = strtok_r(line, ",", &sv); t && k < 24; t = strtok_r(NULL, ",", &sv)) f[k++] = t;
-    if (k != 24) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: %d fields, want 24", path, line_no, k); break; }
+    for (char *t = strtok_r(line, ",", &sv); t && k < 28; t = strtok_r(NULL, ",", &sv)) f[k++] = t;
+    if (k != nf) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: %d fields, want %d", path, line_no, k, nf); break; }
     if (keep && strcmp(f[1], EXP_BASE) && !in_list(keep, f[1])) continue;
-    double v[24];
-    for (int q = 2; q < 24; q++) {
+    double v[28];
+    for (int q = 24; q < 28; q++) v[q] = NAN;
+    for (int q = 2; q < nf; q++) {
       char *end;
       v[q] = strtod(f[q], &end);
       if (end == f[q] || *end) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: field %d is not a number ('%s')", path, line_no, q + 1, f[q]); break; }
@@ -893,6 +911,7 @@ static mgs_status read_curves(const char *path, const char *keep, exp_run **runs
     p->floaters = v[11]; p->floaters_fraction = v[12]; p->floater_mass = v[13]; p->floater_mass_fraction = v[14];
     for (int q = 0; q < 3; q++) { p->betti[q] = (int)v[15 + q]; p->betti_persistent[q] = (int)v[18 + q]; }
     p->bottleneck = v[21];
+    p->chamfer_fused = v[24]; p->fscore_fused = v[25]; p->chamfer_mesh = v[26]; p->fscore_mesh = v[27];
     p->measure_seconds = NAN;
   }
   free(text);

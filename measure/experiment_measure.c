@@ -107,6 +107,11 @@ mgs_status exp_read_eval(const char *run_dir, int iteration, exp_point *p, mgs_e
     p->fscore = num_or_nan(g, "fscore");
     p->floaters = num_or_nan(g, "floaters");
     p->floaters_fraction = num_or_nan(g, "floaters_fraction");
+    const cJSON *fu = cJSON_GetObjectItemCaseSensitive(g, "fused"), *sg = cJSON_GetObjectItemCaseSensitive(g, "sugar");
+    p->chamfer_fused = num_or_nan(fu, "chamfer");
+    p->fscore_fused = num_or_nan(fu, "fscore");
+    p->chamfer_mesh = num_or_nan(sg, "chamfer");
+    p->fscore_mesh = num_or_nan(sg, "fscore");
     if (!isfinite(p->psnr) || !isfinite(p->gaussians))
       st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: \"%s\" has no PSNR or Gaussian count", path, key);
   }
@@ -212,6 +217,10 @@ mgs_status exp_run_write(const char *path, const exp_run *r, mgs_error *err) {
     add_num(e, "gaussians", p->gaussians);
     add_num(e, "chamfer", p->chamfer);
     add_num(e, "fscore", p->fscore);
+    add_num(e, "chamfer_fused", p->chamfer_fused);
+    add_num(e, "fscore_fused", p->fscore_fused);
+    add_num(e, "chamfer_mesh", p->chamfer_mesh);
+    add_num(e, "fscore_mesh", p->fscore_mesh);
     add_num(e, "floaters", p->floaters);
     add_num(e, "floaters_fraction", p->floaters_fraction);
     add_num(e, "floater_mass", p->floater_mass);
@@ -264,6 +273,10 @@ mgs_status exp_run_read(const char *path, exp_run *r, mgs_error *err) {
     p->gaussians = get_num(e, "gaussians");
     p->chamfer = get_num(e, "chamfer");
     p->fscore = get_num(e, "fscore");
+    p->chamfer_fused = get_num(e, "chamfer_fused");
+    p->fscore_fused = get_num(e, "fscore_fused");
+    p->chamfer_mesh = get_num(e, "chamfer_mesh");
+    p->fscore_mesh = get_num(e, "fscore_mesh");
     p->floaters = get_num(e, "floaters");
     p->floaters_fraction = get_num(e, "floaters_fraction");
     p->floater_mass = get_num(e, "floater_mass");

@@ -28,7 +28,9 @@ typedef struct exp_point {
   int iteration;
   double wall_seconds;         /* training wall time up to this iteration */
   double psnr, ssim, gaussians;                     /* morsegs eval */
-  double chamfer, fscore, floaters, floaters_fraction; /* morsegs eval --mesh (H2: floaters) */
+  double chamfer, fscore, floaters, floaters_fraction; /* morsegs eval --mesh: the α-surface (H2: floaters) */
+  double chamfer_fused, fscore_fused;               /* the depth-fused surface (geometry.fused) */
+  double chamfer_mesh, fscore_mesh;                 /* SuGaR's mesh (geometry.sugar; final point of SuGaR runs) */
   double floater_mass, floater_mass_fraction;       /* viewer-visible: Σα beyond the distance */
   int betti[3], betti_persistent[3];                /* model SDF at level 0; -1 = unknown */
   double bottleneck;                                /* to the GT diagram; INFINITY if unmatched */

@@ -173,6 +173,60 @@ int main(void) {
   int lines = 0;
   for (char *q = text; q && *q; q++) lines += *q == '\n';
   CHECK_MSG(lines == 1 + n_points, "%d lines, want %d", lines, 1 + n_points);
+  /* written in the current layout: the depth-fused surface and SuGaR's mesh at the end */
+  CHECK(text && strstr(text, "analysis_seconds,chamfer_fused,fscore_fused,chamfer_mesh,fscore_mesh\n"));
+  /* H1 on the depth-fused surface: the same file with each run's fused Chamfer at twice its
+     α-surface one (so "good" is -50 % there too, "nochamfer" has none), re-analysed */
+  char fused_dir[512], fused_out[512];
+  snprintf(fused_dir, sizeof fused_dir, "%s/fused", dir);
+  snprintf(fused_out, sizeof fused_out, "%s/fused_again", dir);
+  CHECK_OK(mgs_mkdir_p(fused_dir, &err), &err);
+  snprintf(path, sizeof path, "%s/curves.csv", fused_dir);
+  f = fopen(path, "w");
+  CHECK(f != NULL);
+  int line_no = 0;
+  char *save = NULL;
+  for (char *line = text && f ? strtok_r(text, "\n", &save) : NULL; line; line = strtok_r(NULL, "\n", &save), line_no++) {
+    if (line_no == 0) { fprintf(f, "%s\n", line); continue; }
+    char *fld[28], *sv = NULL;
+    int k = 0;
+    for (char *t = strtok_r(line, ",", &sv); t && k < 28; t = strtok_r(NULL, ",", &sv)) fld[k++] = t;
+    CHECK(k == 28);
+    if (k != 28) break;
+    char fused[64];
+    snprintf(fused, sizeof fused, "%.9g", 2 * strtod(fld[9], NULL));
+    fld[24] = fused;
+    for (int q = 0; q < 28; q++) fprintf(f, "%s%s", fld[q], q < 27 ? "," : "\n");
+  }
+  if (f) fclose(f);
+  free(text);
+  text = NULL;
+  snprintf(path, sizeof path, "%s/RESULTS.json", out);
+  char dst[700];
+  snprintf(dst, sizeof dst, "%s/RESULTS.json", fused_dir);
+  CHECK(mgs_read_file(path, &text, &len, &err) == MGS_OK && mgs_write_file_atomic(dst, text, len, &err) == MGS_OK);
+  free(text);
+  text = NULL;
+  CHECK(mgs_test_sh("%s experiment --report-from %s -o %s > /dev/null", cli, fused_dir, fused_out) == 0);
+  snprintf(path, sizeof path, "%s/RESULTS.json", fused_out);
+  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
+  root = text ? cJSON_Parse(text) : NULL;
+  h = hyp(root, "good", "H1_fused");
+  CHECK_MSG(h && !strcmp(str(h, "verdict"), "yes") && fabs(num(h, "change_mean") - log(0.5)) < 0.01, "H1_fused of good: %s",
+            h ? str(h, "verdict") : "(none)");
+  h = hyp(root, "bad", "H1_fused");
+  CHECK(h && !strcmp(str(h, "verdict"), "worse"));
+  h = hyp(root, "nochamfer", "H1_fused");
+  CHECK(h && !strcmp(str(h, "verdict"), "n/a"));
+  /* Holm over the H1 family: both surfaces' cells now count */
+  h = hyp(root, "good", "H1");
+  CHECK(h && !strcmp(str(h, "verdict"), "yes") && num(h, "p_holm") >= num(h, "p"));
+  cJSON_Delete(root);
+  free(text);
+  text = NULL;
+  snprintf(path, sizeof path, "%s/RESULTS.md", fused_out);
+  CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
+  CHECK(text && strstr(text, "H1 Chamfer (depth-fused surface)"));
   free(text);
   return mgs_test_finish();
 }

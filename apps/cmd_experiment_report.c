@@ -337,6 +337,51 @@ static mgs_status write_csvs(const exp_report_in *in, mgs_error *err) {
   return mgs_atomic_commit(af, err);
 }
 
+/* Mean over a variant's main runs on ds of one final-point figure (NAN when none has it). */
+static double mean_final(const exp_report_in *in, const char *ds, const char *var, int what, int *n_out) {
+  double s = 0;
+  int n = 0;
+  for (int seed = 0; seed < 64; seed++) {
+    const exp_run *r = find_run(in, ds, var, seed, 1.0);
+    const exp_point *p = r ? final_pt(r) : NULL;
+    if (!p) continue;
+    double x = what == 0 ? p->gaussians : what == 1 ? p->psnr : what == 2 ? p->chamfer : what == 3 ? p->chamfer_fused
+             : what == 4 ? p->chamfer_mesh : r->train_cpu_seconds;
+    if (isfinite(x)) { s += x; n++; }
+  }
+  if (n_out) *n_out = n;
+  return n ? s / n : NAN;
+}
+
+/* The methods side by side on one dataset: means over seeds of the final figures, the
+ * baseline's as the reference (what the issues on the proposal's baselines compare; the
+ * verdicts above are the paired statistics). */
+static void means_table(FILE *f, const exp_report_in *in, const char *ds) {
+  fprintf(f, "\n### Every method beside the 3DGS baseline (means over seeds of the final point; not a verdict)\n\n"
+             "| variant | seeds | Gaussians (%% of baseline) | PSNR dB (change) | α-surface Chamfer | depth-fused Chamfer "
+             "| SuGaR mesh Chamfer | training CPU s (× baseline) |\n|---|---|---|---|---|---|---|---|\n");
+  const double g0 = mean_final(in, ds, EXP_BASE, 0, NULL), p0 = mean_final(in, ds, EXP_BASE, 1, NULL),
+               c0 = mean_final(in, ds, EXP_BASE, 5, NULL);
+  for (size_t v = 0; v < in->n_variants; v++) {
+    const char *var = in->variants[v].name;
+    int n = 0;
+    const double g = mean_final(in, ds, var, 0, &n);
+    if (!n) continue;
+    const double p = mean_final(in, ds, var, 1, NULL), cpu = mean_final(in, ds, var, 5, NULL);
+    char gs[64], ps[64], ca[32], cf[32], cm[32], cs[64];
+    snprintf(gs, sizeof gs, "%.0f (%.0f %%)", g, 100 * g / g0);
+    if (!isfinite(g0)) snprintf(gs, sizeof gs, "%.0f", g);
+    snprintf(ps, sizeof ps, "%.3f (%+.2f)", p, p - p0);
+    if (!isfinite(p0)) snprintf(ps, sizeof ps, "%.3f", p);
+    fmt_or_na(ca, sizeof ca, "%.5g", mean_final(in, ds, var, 2, NULL));
+    fmt_or_na(cf, sizeof cf, "%.5g", mean_final(in, ds, var, 3, NULL));
+    fmt_or_na(cm, sizeof cm, "%.5g", mean_final(in, ds, var, 4, NULL));
+    if (isfinite(cpu) && isfinite(c0) && c0 > 0) snprintf(cs, sizeof cs, "%.0f (×%.2f)", cpu, cpu / c0);
+    else fmt_or_na(cs, sizeof cs, "%.0f", cpu);
+    fprintf(f, "| %s | %d | %s | %s | %s | %s | %s | %s |\n", var, n, gs, ps, ca, cf, cm, cs);
+  }
+}
+
 /* One row of the runs table: the final point's figures in the formats `morsegs eval` prints. */
 static void run_row(FILE *f, const exp_run *r) {
   const exp_point *p = final_pt(r);
@@ -735,6 +780,7 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
       fmt_or_na(b, sizeof b, "%.2g", sd_of(bn, nb));
       fprintf(f, "| %s | %d | %d of %d | %s | %s ± %s%s |\n", var, n, match, n, all, a, b, inf ? " (some inf)" : "");
     }
+    means_table(f, in, ds);
     /* the runs */
     fprintf(f, "\n### Runs (final evaluation point; figures as `morsegs eval` reports them)\n\n"
                "| dataset | variant | seed | iteration | PSNR | SSIM | Gaussians | Chamfer | F-score | floaters (H2) | visible "

@@ -155,6 +155,9 @@ int main(void) {
   snprintf(path, sizeof path, "%s/RESULTS.md", out);
   CHECK_OK(mgs_read_file(path, &text, &len, &err), &err);
   CHECK(text && strstr(text, "| toy | good | 3 | -50.0 % ["));
+  /* the methods side by side: means over seeds, the baseline as the reference */
+  CHECK_MSG(text && strstr(text, "| good | 3 | 1415 (71 %) | 25.600 (+0.60) | 0.005 |"), "no means row for good");
+  CHECK(text && strstr(text, "| baseline | 3 | 2000 (100 %) | 25.000 (+0.00) | 0.01 |"));
   CHECK(text && strstr(text, "Pareto front (what H3 compares with"));
   CHECK(text && strstr(text, "## Verdicts against the earlier report"));
   CHECK(text && strstr(text, "| missing | baseline | not available |"));

@@ -129,6 +129,8 @@ static void importance_range(void *ctx, size_t b, size_t e) {
 mgs_status mgs_raster_blend_stats(mgs_raster *r, mgs_raster_blend *out, mgs_error *err) {
   if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_blend.c: NULL argument");
   if (!r->have_forward) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_blend.c: no forward pass on this context");
+  if (r->surfel) /* the pass re-evaluates 3DGS footprints: a surfel forward has none */
+    return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "render/raster_blend.c: blending statistics of a 2DGS forward are not implemented");
   size_t npix = (size_t)r->width * r->height;
   mgs_status st = reserve(r, npix, r->n_isect, r->n, err);
   if (st) return st;

@@ -33,14 +33,18 @@ static void cam_par_init(const mgs_raster *r, cam_par *cp) {
   mgs_camera_center(c, cp->campos);
 }
 
+/* exp as the vectorised projection takes it (v16f_exp), so that the backward's T is the
+ * forward's bit for bit. */
+static inline float exp_same(float x) { return v16f_exp(v16f_set1(x))[0]; }
+
 /* Rotation, scales and T of surfel i (the backward recomputes them through this same code).
  * td: camera-space centre (double). */
 static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const double td[3], float R[9], float s[2],
                      float Tu[3], float Tv[3], float Tw[3]) {
   const mgs_gaussians *g = r->g;
   mgs_quat_to_mat3f(g->rot + 4 * i, R);
-  s[0] = r->s.scale_modifier * expf(g->log_scale[3 * i]);
-  s[1] = r->s.scale_modifier * expf(g->log_scale[3 * i + 1]);
+  s[0] = r->s.scale_modifier * exp_same(g->log_scale[3 * i]);
+  s[1] = r->s.scale_modifier * exp_same(g->log_scale[3 * i + 1]);
   const mgs_camera *c = &r->cam;
   float *rows[3] = {Tu, Tv, Tw};
   for (int a = 0; a < 3; a++) {
@@ -53,94 +57,12 @@ static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const dou
   Tw[2] = (float)td[2];
 }
 
-/* The affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T. */
-static void surf_coeffs(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, mgs_surf2d *sf) {
-  double u[3], v[3], w[3];
-  for (int k = 0; k < 3; k++) {
-    w[k] = Tw[k];
-    u[k] = (double)Tu[k] - (double)ox * w[k];
-    v[k] = (double)Tv[k] - (double)oy * w[k];
-  }
-  double c0[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
-  double c1[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
-  double c2[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  for (int k = 0; k < 3; k++) {
-    sf->c0[k] = (float)c0[k];
-    sf->c1[k] = (float)c1[k];
-    sf->c2[k] = (float)c2[k];
-  }
-  sf->det = (float)(w[0] * c2[0] + w[1] * c2[1] + w[2] * c2[2]);
-}
-
 static void cull(mgs_raster *r, size_t i) {
   r->radii[i] = 0;
   r->count[i] = 0;
 }
 
 static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
-
-static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
-  const mgs_gaussians *g = r->g;
-  const double *V = r->cam.w2c;
-  double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
-  for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
-  cull(r, i);
-  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return 0;
-  const float *q = g->rot + 4 * i;
-  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return 0;
-  mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
-  float R[9], s[2], Tu[3], Tv[3], Tw[3];
-  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
-  /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
-  double cosv = 0;
-  for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
-  if (cosv == 0 || !isfinite(cosv)) return 0;
-  mgs_surf2d_cold *cd = mgs_raster2d_cold(r) + i;
-  cd->nsign = cosv > 0 ? 1.0f : -1.0f;
-  for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * R[3 * k + 2];
-  /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
-  const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
-  float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-  if (d == 0 || !isfinite(d)) return 0;
-  float f[3] = {t[0] / d, t[1] / d, t[2] / d};
-  float cx = f[0] * Tu[0] * Tw[0] + f[1] * Tu[1] * Tw[1] + f[2] * Tu[2] * Tw[2];
-  float cy = f[0] * Tv[0] * Tw[0] + f[1] * Tv[1] * Tw[1] + f[2] * Tv[2] * Tw[2];
-  float hx0 = cx * cx - (f[0] * Tu[0] * Tu[0] + f[1] * Tu[1] * Tu[1] + f[2] * Tu[2] * Tu[2]);
-  float hy0 = cy * cy - (f[0] * Tv[0] * Tv[0] + f[1] * Tv[1] * Tv[1] + f[2] * Tv[2] * Tv[2]);
-  float hx = sqrtf(hx0 > 1e-4f ? hx0 : 1e-4f), hy = sqrtf(hy0 > 1e-4f ? hy0 : 1e-4f);
-  float ext = hx > hy ? hx : hy;
-  float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
-  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return 0;
-  sf->ox = cx;
-  sf->oy = cy;
-  sf->zc = Tw[2];
-  surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
-  /* the reference's getRect, in its pixel coordinates (centres at integers) */
-  double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
-  int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
-  int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_x);
-  int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_y);
-  if ((x1 - x0) * (y1 - y0) == 0) return 0;
-  /* view direction (the colour follows per block of 16: surfel_colours) */
-  mgs_proj_aux *ax = &r->aux[i];
-  double dd[3] = {p[0] - cp->campos[0], p[1] - cp->campos[1], p[2] - cp->campos[2]};
-  double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
-  for (int k = 0; k < 3; k++) ax->dir[k] = dist > 0 ? (float)(dd[k] / dist) : 0.0f;
-  ax->dist = (float)dist;
-  for (int k = 0; k < 3; k++) ax->t[k] = (float)td[k];
-  float op = mgs_sigmoidf(g->opacity[i]);
-  sf->opacity = op;
-  mgs_splat *sp = &r->splat[i];
-  memset(sp, 0, sizeof *sp);
-  sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
-  r->radii[i] = (int)radius;
-  if (op < MGS_ALPHA_MIN) return 1; /* alpha < 1/255 everywhere: nothing to bin */
-  sf->rf = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
-  uint16_t *rc = r->rect + 4 * i;
-  rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
-  r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
-  return 1;
-}
 
 typedef struct proj_ctx {
   mgs_raster *r;
@@ -156,7 +78,7 @@ typedef struct proj_ctx {
  * has 0.1 %, and the margins) so that the float per-pixel rho3 of every pixel it leaves out
  * is above rmax: skipping those pixels changes no value. Tiles of the authors' rect that
  * miss it are not binned (the same result, as 3DGS's binning). For the binned surfels
- * blk[0..nl) (project_one stored rmax in rf), in double, 16 lanes in branch-free loops. */
+ * blk[0..nl) (project_block stored rmax in rf), in double, 16 lanes in branch-free loops. */
 typedef double v8d2 __attribute__((vector_size(64)));
 typedef int64_t v8l2 __attribute__((vector_size(64)));
 static inline v8d2 d8_set1(double x) { return (v8d2){x, x, x, x, x, x, x, x}; }
@@ -172,6 +94,7 @@ static inline v8d2 d8_sqrt(v8d2 x) {
 static inline v8d2 d8_abs(v8d2 x) { return (v8d2)((v8l2)x & (v8l2){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}); }
 static inline v8d2 d8_load(const double *p) { v8d2 v; memcpy(&v, p, sizeof v); return v; }
 static inline void d8_store(double *p, v8d2 v) { memcpy(p, &v, sizeof v); }
+static inline void v8i_store8(int *p, v8i v) { memcpy(p, &v, sizeof v); }
 
 static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
   mgs_surf2d *surf = mgs_raster2d_surf(r);
@@ -249,7 +172,7 @@ static void block_lanes(const mgs_raster *r, const size_t *blk, int nl, float di
 }
 #endif
 
-/* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
+/* The SH colours of the surfels blk[0..nl) (project_block passed them; spread below 2^24),
  * 16 at once; a non-finite colour culls its surfel. */
 static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
   const mgs_gaussians *g = r->g;
@@ -282,29 +205,200 @@ static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
   }
 }
 
+/* A block of up to 16 surfels projected at once (lanes past nl, and culled lanes, hold
+ * benign values and are ignored). The float algebra (rotation, T, the 3-sigma box) runs as
+ * 16-wide vectors, the double parts (camera-space centre, T's centre column, the affine
+ * coefficients, the tile rect, the view direction) as two 8-wide ones, in the same
+ * operations and order as surfel_T (-std=c17 contracts nothing), so that T
+ * is what the backward recomputes, bit for bit; only the scales' and the opacity's exp are
+ * the vector one (the backward takes the scales through exp_same). */
+
+static inline v8d2 d8_from_float(const float *p) { v8f v; memcpy(&v, p, sizeof v); return __builtin_convertvector(v, v8d2); }
+static inline void d8_to_float(float *p, v8d2 v) { v8f f = __builtin_convertvector(v, v8f); memcpy(p, &f, sizeof f); }
+static inline v8i d8_clamp_tile(v8d2 v, double hi) { /* clamp_tile, 8 lanes */
+  v8d2 c = d8_sel(v > d8_set1(hi), d8_set1(hi), d8_sel(v > d8_set1(0.0), v, d8_set1(0.0)));
+  return __builtin_convertvector(c, v8i);
+}
+
+static void project_block(const proj_ctx *pc, const size_t *ids, int nl) {
+  mgs_raster *r = pc->r;
+  const mgs_gaussians *g = r->g;
+  const mgs_camera *cam = &r->cam;
+  const cam_par *cp = &pc->cp;
+  const double *V = cam->w2c;
+  double md[3][16], td[3][16];
+  for (int l = 0; l < 16; l++)
+    for (int k = 0; k < 3; k++) md[k][l] = g->mean[3 * ids[l < nl ? l : 0] + k];
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 m0 = d8_load(md[0] + h), m1 = d8_load(md[1] + h), m2 = d8_load(md[2] + h);
+    for (int k = 0; k < 3; k++)
+      d8_store(td[k] + h, d8_set1(V[4 * k]) * m0 + d8_set1(V[4 * k + 1]) * m1 + d8_set1(V[4 * k + 2]) * m2 + d8_set1(V[4 * k + 3]));
+  }
+  /* lane set-up: the early culls, parameters (dead lanes: identity, centre (0, 0, 1)) */
+  int alive[16];
+  float q[4][16], ls[2][16], logit[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = 0;
+    if (l < nl) {
+      size_t i = ids[l];
+      cull(r, i);
+      const float *qq = g->rot + 4 * i;
+      ok = td[2][l] > r->s.near_plane && isfinite(td[0][l]) && isfinite(td[1][l]) && isfinite(td[2][l]) &&
+           isfinite(qq[0] + qq[1] + qq[2] + qq[3]) && isfinite(g->opacity[i]);
+    }
+    alive[l] = ok;
+    size_t i = ids[l < nl ? l : 0];
+    if (!ok) { td[0][l] = td[1][l] = 0; td[2][l] = 1; }
+    for (int k = 0; k < 4; k++) q[k][l] = ok ? g->rot[4 * i + k] : (float)(k == 0);
+    for (int k = 0; k < 2; k++) ls[k][l] = ok ? g->log_scale[3 * i + k] : 0.0f;
+    logit[l] = ok ? g->opacity[i] : 0.0f;
+  }
+  /* rotation (mgs_quat_to_mat3f), scales, T's first two columns */
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f), two = v16f_set1(2.0f);
+  v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
+  v16f qn = v16f_sqrt(w * w + x * x + y * y + z * z);
+  v16i nz = qn > zero;
+  v16f qd = v16f_select(nz, qn, one);
+  w = v16f_select(nz, w / qd, one); x = v16f_and(nz, x / qd); y = v16f_and(nz, y / qd); z = v16f_and(nz, z / qd);
+  v16f R[9];
+  R[0] = one - two * (y * y + z * z); R[1] = two * (x * y - w * z); R[2] = two * (x * z + w * y);
+  R[3] = two * (x * y + w * z); R[4] = one - two * (x * x + z * z); R[5] = two * (y * z - w * x);
+  R[6] = two * (x * z - w * y); R[7] = two * (y * z + w * x); R[8] = one - two * (x * x + y * y);
+  v16f smod = v16f_set1(r->s.scale_modifier);
+  v16f s0 = smod * v16f_exp(v16f_load(ls[0])), s1 = smod * v16f_exp(v16f_load(ls[1]));
+  v16f Tc[3][2]; /* Tc[a] = (Tu, Tv, Tw)[a] columns 0 and 1 */
+  for (int a = 0; a < 3; a++) {
+    const float *m = cp->M + 3 * a;
+    v16f m0 = v16f_set1(m[0]), m1 = v16f_set1(m[1]), m2 = v16f_set1(m[2]);
+    Tc[a][0] = s0 * (m0 * R[0] + m1 * R[3] + m2 * R[6]);
+    Tc[a][1] = s1 * (m0 * R[1] + m1 * R[4] + m2 * R[7]);
+  }
+  /* T's centre column (double, to float), the normal's side, the view direction */
+  float tu2[16], tv2[16], tw2[16], dirl[3][16], distl[16];
+  double cosv[16];
+  float r2[3][16];
+  for (int k = 0; k < 3; k++) {
+    v16f_store(r2[k], R[3 * k + 2]);
+  }
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 t0 = d8_load(td[0] + h), t1 = d8_load(td[1] + h), t2 = d8_load(td[2] + h);
+    d8_to_float(tu2 + h, d8_set1(cam->fx) * t0 + d8_set1(cam->cx) * t2);
+    d8_to_float(tv2 + h, d8_set1(cam->fy) * t1 + d8_set1(cam->cy) * t2);
+    d8_to_float(tw2 + h, t2);
+    v8d2 dd[3], cv = d8_set1(0.0);
+    for (int k = 0; k < 3; k++) {
+      v8d2 pk = d8_load(md[k] + h);
+      cv = cv + (d8_set1(cp->campos[k]) - pk) * d8_from_float(r2[k] + h);
+      dd[k] = pk - d8_set1(cp->campos[k]);
+    }
+    d8_store(cosv + h, cv);
+    v8d2 dist = d8_sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+    v8l2 pos = dist > d8_set1(0.0);
+    v8d2 dq = d8_sel(pos, dist, d8_set1(1.0));
+    for (int k = 0; k < 3; k++) d8_to_float(dirl[k] + h, d8_sel(pos, dd[k] / dq, d8_set1(0.0)));
+    d8_to_float(distl + h, dist);
+  }
+  /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
+  v16f Tu[3] = {Tc[0][0], Tc[0][1], v16f_load(tu2)}, Tv[3] = {Tc[1][0], Tc[1][1], v16f_load(tv2)};
+  v16f Tw[3] = {Tc[2][0], Tc[2][1], v16f_load(tw2)};
+  const v16f t0 = v16f_set1(CUTOFF * CUTOFF), t2 = v16f_set1(-1.0f);
+  v16f d = t0 * Tw[0] * Tw[0] + t0 * Tw[1] * Tw[1] + t2 * Tw[2] * Tw[2];
+  v16i dok = (d != zero) & (d - d == zero);
+  v16f dq2 = v16f_select(dok, d, one);
+  v16f f0 = t0 / dq2, f2 = t2 / dq2;
+  v16f cx = f0 * Tu[0] * Tw[0] + f0 * Tu[1] * Tw[1] + f2 * Tu[2] * Tw[2];
+  v16f cy = f0 * Tv[0] * Tw[0] + f0 * Tv[1] * Tw[1] + f2 * Tv[2] * Tw[2];
+  v16f hx0 = cx * cx - (f0 * Tu[0] * Tu[0] + f0 * Tu[1] * Tu[1] + f2 * Tu[2] * Tu[2]);
+  v16f hy0 = cy * cy - (f0 * Tv[0] * Tv[0] + f0 * Tv[1] * Tv[1] + f2 * Tv[2] * Tv[2]);
+  const v16f hmin = v16f_set1(1e-4f), rmin = v16f_set1(CUTOFF * FILTER_SIZE);
+  v16f hx = v16f_sqrt(v16f_select(hx0 > hmin, hx0, hmin)), hy = v16f_sqrt(v16f_select(hy0 > hmin, hy0, hmin));
+  v16f ext = v16f_select(hx > hy, hx, hy);
+  v16f radius = v16f_ceil(v16f_select(ext > rmin, ext, rmin));
+  v16f op = one / (one + v16f_exp(zero - v16f_load(logit)));
+  v16i bok = dok & (cx - cx == zero) & (cy - cy == zero) & (radius - radius == zero) & (radius <= v16f_set1(1e7f));
+  float cxl[16], cyl[16], radl[16], opl[16], T9[9][16];
+  v16f_store(cxl, cx); v16f_store(cyl, cy); v16f_store(radl, radius); v16f_store(opl, op);
+  for (int k = 0; k < 3; k++) { v16f_store(T9[k], Tu[k]); v16f_store(T9[3 + k], Tv[k]); v16f_store(T9[6 + k], Tw[k]); }
+  int32_t boxok[16];
+  v16i_store(boxok, bok);
+  /* the affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T; the
+     reference's getRect */
+  float cf[10][16];
+  int rect[4][16];
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 ox = d8_from_float(cxl + h), oy = d8_from_float(cyl + h), wv[3], u[3], v[3];
+    for (int k = 0; k < 3; k++) {
+      wv[k] = d8_from_float(T9[6 + k] + h);
+      u[k] = d8_from_float(T9[k] + h) - ox * wv[k];
+      v[k] = d8_from_float(T9[3 + k] + h) - oy * wv[k];
+    }
+    v8d2 c[10];
+    c[0] = v[1] * wv[2] - v[2] * wv[1]; c[1] = v[2] * wv[0] - v[0] * wv[2]; c[2] = v[0] * wv[1] - v[1] * wv[0];
+    c[3] = wv[1] * u[2] - wv[2] * u[1]; c[4] = wv[2] * u[0] - wv[0] * u[2]; c[5] = wv[0] * u[1] - wv[1] * u[0];
+    c[6] = u[1] * v[2] - u[2] * v[1]; c[7] = u[2] * v[0] - u[0] * v[2]; c[8] = u[0] * v[1] - u[1] * v[0];
+    c[9] = wv[0] * c[6] + wv[1] * c[7] + wv[2] * c[8];
+    for (int k = 0; k < 10; k++) d8_to_float(cf[k] + h, c[k]);
+    v8d2 rad = d8_from_float(radl + h), px = ox - d8_set1(0.5), py = oy - d8_set1(0.5), ts = d8_set1(1.0 / MGS_TILE_SIZE);
+    v8d2 tm = d8_set1(MGS_TILE_SIZE - 1);
+    v8i_store8(rect[0] + h, d8_clamp_tile((px - rad) * ts, r->tiles_x));
+    v8i_store8(rect[1] + h, d8_clamp_tile((py - rad) * ts, r->tiles_y));
+    v8i_store8(rect[2] + h, d8_clamp_tile((px + rad + tm) * ts, r->tiles_x));
+    v8i_store8(rect[3] + h, d8_clamp_tile((py + rad + tm) * ts, r->tiles_y));
+  }
+  /* per lane: the remaining culls and the stores */
+  size_t blk[16], bb[16];
+  int na = 0, nb = 0;
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  mgs_surf2d_cold *cold = mgs_raster2d_cold(r);
+  for (int l = 0; l < nl; l++) {
+    if (!alive[l]) continue;
+    size_t i = ids[l];
+    /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
+    if (cosv[l] == 0 || !isfinite(cosv[l]) || !boxok[l]) continue;
+    if ((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]) == 0) continue;
+    mgs_surf2d_cold *cd = cold + i;
+    cd->nsign = cosv[l] > 0 ? 1.0f : -1.0f;
+    for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * r2[k][l];
+    mgs_surf2d *sf = surf + i;
+    sf->ox = cxl[l];
+    sf->oy = cyl[l];
+    sf->zc = tw2[l];
+    for (int k = 0; k < 3; k++) { sf->c0[k] = cf[k][l]; sf->c1[k] = cf[3 + k][l]; sf->c2[k] = cf[6 + k][l]; }
+    sf->det = cf[9][l];
+    mgs_proj_aux *ax = &r->aux[i];
+    for (int k = 0; k < 3; k++) { ax->dir[k] = dirl[k][l]; ax->t[k] = (float)td[k][l]; }
+    ax->dist = distl[l];
+    float o = opl[l];
+    sf->opacity = o;
+    mgs_splat *sp = &r->splat[i];
+    memset(sp, 0, sizeof *sp);
+    sp->u = cxl[l]; sp->v = cyl[l]; sp->z = ax->t[2]; sp->opacity = o;
+    r->radii[i] = (int)radl[l];
+    blk[na++] = i;
+    if (o < MGS_ALPHA_MIN) continue; /* alpha < 1/255 everywhere: nothing to bin */
+    sf->rf = 2.0f * logf(o / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
+    uint16_t *rc = r->rect + 4 * i;
+    for (int k = 0; k < 4; k++) rc[k] = (uint16_t)rect[k][l];
+    r->count[i] = (uint32_t)((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]));
+    bb[nb++] = i;
+  }
+  if (na) surfel_colours(r, blk, na);
+  int nb2 = 0;
+  for (int l = 0; l < nb; l++)
+    if (r->count[bb[l]]) bb[nb2++] = bb[l];
+  if (nb2) surfel_bounds(r, bb, nb2);
+}
+
 static void project_range(void *vctx, size_t b, size_t e) {
   const proj_ctx *pc = vctx;
-  size_t blk[16], bb[16];
-  int nl = 0, nb = 0;
+  size_t ids[16];
+  int nl = 0;
   for (size_t k = b; k < e; k++) {
     size_t i = pc->idx ? pc->idx[k] : k;
-    if (!pc->idx && k + 8 < e) { /* the records are written line by line: claim them ahead */
-      const mgs_raster *r = pc->r;
-      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8), 1);
-      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8) + sizeof(mgs_surf2d) - 1, 1);
-      __builtin_prefetch(&r->splat[k + 8], 1);
-      __builtin_prefetch(&r->aux[k + 8], 1);
-    }
-    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
-    if (project_one(pc->r, &pc->cp, i)) {
-      blk[nl++] = i;
-      if (pc->r->count[i]) bb[nb++] = i;
-    }
-    if (nb == 16) { surfel_bounds(pc->r, bb, nb); nb = 0; }
-    if (nl == 16) { surfel_colours(pc->r, blk, nl); nl = 0; }
+    if (nl && (nl == 16 || i - ids[0] >= (1u << 24))) { project_block(pc, ids, nl); nl = 0; }
+    ids[nl++] = i;
   }
-  if (nb) surfel_bounds(pc->r, bb, nb);
-  if (nl) surfel_colours(pc->r, blk, nl);
+  if (nl) project_block(pc, ids, nl);
 }
 
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {

@@ -651,6 +651,6 @@ mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *
 }
 
 void mgs_raster2d_free(mgs_raster *r) {
-  free(r->surf); free(r->sgrad); free(r->s_normal); free(r->s_median); free(r->s_dist); free(r->s_m1);
+  free(r->surf); free(r->sgrad); free(r->s_rows); free(r->s_normal); free(r->s_median); free(r->s_dist); free(r->s_m1);
   free(r->s_m2); free(r->s_m0); free(r->s_medid); free(r->s_gmed); free(r->s_gnormal); free(r->s_gdist);
 }

@@ -2,7 +2,9 @@
  * 3-sigma box, SH colour, tile rectangle) and its backward (T, the box centre, the normal
  * and the colour back to mean, scales, quaternion, opacity and SH), as the authors'
  * compute_transmat / compute_aabb / compute_transmat_aabb. T's centre column (the camera-
- * space centre) is computed in double (scenes far from the origin), the rest in float. */
+ * space centre) is computed in double (scenes far from the origin), the rest in float.
+ * Both directions take 16 surfels at a time (as the 3DGS projection): float algebra in
+ * 16-wide vectors, the double parts in two 8-wide ones. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,130 +35,7 @@ static void cam_par_init(const mgs_raster *r, cam_par *cp) {
   mgs_camera_center(c, cp->campos);
 }
 
-/* Rotation, scales and T of surfel i (the backward recomputes them through this same code).
- * td: camera-space centre (double). */
-static void surfel_T(const mgs_raster *r, const cam_par *cp, size_t i, const double td[3], float R[9], float s[2],
-                     float Tu[3], float Tv[3], float Tw[3]) {
-  const mgs_gaussians *g = r->g;
-  mgs_quat_to_mat3f(g->rot + 4 * i, R);
-  s[0] = r->s.scale_modifier * expf(g->log_scale[3 * i]);
-  s[1] = r->s.scale_modifier * expf(g->log_scale[3 * i + 1]);
-  const mgs_camera *c = &r->cam;
-  float *rows[3] = {Tu, Tv, Tw};
-  for (int a = 0; a < 3; a++) {
-    const float *m = cp->M + 3 * a;
-    rows[a][0] = s[0] * (m[0] * R[0] + m[1] * R[3] + m[2] * R[6]);
-    rows[a][1] = s[1] * (m[0] * R[1] + m[1] * R[4] + m[2] * R[7]);
-  }
-  Tu[2] = (float)(c->fx * td[0] + c->cx * td[2]);
-  Tv[2] = (float)(c->fy * td[1] + c->cy * td[2]);
-  Tw[2] = (float)td[2];
-}
-
-/* The affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T. */
-static void surf_coeffs(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, mgs_surf2d *sf) {
-  double u[3], v[3], w[3];
-  for (int k = 0; k < 3; k++) {
-    w[k] = Tw[k];
-    u[k] = (double)Tu[k] - (double)ox * w[k];
-    v[k] = (double)Tv[k] - (double)oy * w[k];
-  }
-  double c0[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
-  double c1[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
-  double c2[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  for (int k = 0; k < 3; k++) {
-    sf->c0[k] = (float)c0[k];
-    sf->c1[k] = (float)c1[k];
-    sf->c2[k] = (float)c2[k];
-  }
-  sf->det = (float)(w[0] * c2[0] + w[1] * c2[1] + w[2] * c2[2]);
-}
-
-static void cull(mgs_raster *r, size_t i) {
-  r->radii[i] = 0;
-  r->count[i] = 0;
-}
-
-static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
-
-static int project_one(mgs_raster *r, const cam_par *cp, size_t i) {
-  const mgs_gaussians *g = r->g;
-  const double *V = r->cam.w2c;
-  double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
-  for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
-  cull(r, i);
-  if (!(td[2] > r->s.near_plane) || !isfinite(td[0]) || !isfinite(td[1]) || !isfinite(td[2])) return 0;
-  const float *q = g->rot + 4 * i;
-  if (!isfinite(q[0] + q[1] + q[2] + q[3]) || !isfinite(g->opacity[i])) return 0;
-  mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
-  float R[9], s[2], Tu[3], Tv[3], Tw[3];
-  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
-  /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
-  double cosv = 0;
-  for (int k = 0; k < 3; k++) cosv += (cp->campos[k] - p[k]) * R[3 * k + 2];
-  if (cosv == 0 || !isfinite(cosv)) return 0;
-  mgs_surf2d_cold *cd = mgs_raster2d_cold(r) + i;
-  cd->nsign = cosv > 0 ? 1.0f : -1.0f;
-  for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * R[3 * k + 2];
-  /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
-  const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
-  float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-  if (d == 0 || !isfinite(d)) return 0;
-  float f[3] = {t[0] / d, t[1] / d, t[2] / d};
-  float cx = f[0] * Tu[0] * Tw[0] + f[1] * Tu[1] * Tw[1] + f[2] * Tu[2] * Tw[2];
-  float cy = f[0] * Tv[0] * Tw[0] + f[1] * Tv[1] * Tw[1] + f[2] * Tv[2] * Tw[2];
-  float hx0 = cx * cx - (f[0] * Tu[0] * Tu[0] + f[1] * Tu[1] * Tu[1] + f[2] * Tu[2] * Tu[2]);
-  float hy0 = cy * cy - (f[0] * Tv[0] * Tv[0] + f[1] * Tv[1] * Tv[1] + f[2] * Tv[2] * Tv[2]);
-  float hx = sqrtf(hx0 > 1e-4f ? hx0 : 1e-4f), hy = sqrtf(hy0 > 1e-4f ? hy0 : 1e-4f);
-  float ext = hx > hy ? hx : hy;
-  float radius = ceilf(ext > CUTOFF * FILTER_SIZE ? ext : CUTOFF * FILTER_SIZE);
-  if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || radius > 1e7f) return 0;
-  sf->ox = cx;
-  sf->oy = cy;
-  sf->zc = Tw[2];
-  surf_coeffs(Tu, Tv, Tw, cx, cy, sf);
-  /* the reference's getRect, in its pixel coordinates (centres at integers) */
-  double px = (double)cx - 0.5, py = (double)cy - 0.5, ts = 1.0 / MGS_TILE_SIZE;
-  int x0 = clamp_tile((px - radius) * ts, r->tiles_x), y0 = clamp_tile((py - radius) * ts, r->tiles_y);
-  int x1 = clamp_tile((px + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_x);
-  int y1 = clamp_tile((py + radius + MGS_TILE_SIZE - 1) * ts, r->tiles_y);
-  if ((x1 - x0) * (y1 - y0) == 0) return 0;
-  /* view direction (the colour follows per block of 16: surfel_colours) */
-  mgs_proj_aux *ax = &r->aux[i];
-  double dd[3] = {p[0] - cp->campos[0], p[1] - cp->campos[1], p[2] - cp->campos[2]};
-  double dist = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
-  for (int k = 0; k < 3; k++) ax->dir[k] = dist > 0 ? (float)(dd[k] / dist) : 0.0f;
-  ax->dist = (float)dist;
-  for (int k = 0; k < 3; k++) ax->t[k] = (float)td[k];
-  float op = mgs_sigmoidf(g->opacity[i]);
-  sf->opacity = op;
-  mgs_splat *sp = &r->splat[i];
-  memset(sp, 0, sizeof *sp);
-  sp->u = cx; sp->v = cy; sp->z = (float)td[2]; sp->opacity = op;
-  r->radii[i] = (int)radius;
-  if (op < MGS_ALPHA_MIN) return 1; /* alpha < 1/255 everywhere: nothing to bin */
-  sf->rf = 2.0f * logf(op / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
-  uint16_t *rc = r->rect + 4 * i;
-  rc[0] = (uint16_t)x0; rc[1] = (uint16_t)y0; rc[2] = (uint16_t)x1; rc[3] = (uint16_t)y1;
-  r->count[i] = (uint32_t)((x1 - x0) * (y1 - y0));
-  return 1;
-}
-
-typedef struct proj_ctx {
-  mgs_raster *r;
-  cam_par cp;
-  const uint32_t *idx;
-} proj_ctx;
-
-/* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
- * {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in the
- * pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its quadratic
- * part is positive definite (p.z keeps one sign inside: p = 0 has no pixel); otherwise (a
- * surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax, which already
- * has 0.1 %, and the margins) so that the float per-pixel rho3 of every pixel it leaves out
- * is above rmax: skipping those pixels changes no value. Tiles of the authors' rect that
- * miss it are not binned (the same result, as 3DGS's binning). For the binned surfels
- * blk[0..nl) (project_one stored rmax in rf), in double, 16 lanes in branch-free loops. */
+/* 8 doubles (the double-precision parts, 8 lanes of a block at a time). */
 typedef double v8d2 __attribute__((vector_size(64)));
 typedef int64_t v8l2 __attribute__((vector_size(64)));
 static inline v8d2 d8_set1(double x) { return (v8d2){x, x, x, x, x, x, x, x}; }
@@ -172,7 +51,87 @@ static inline v8d2 d8_sqrt(v8d2 x) {
 static inline v8d2 d8_abs(v8d2 x) { return (v8d2)((v8l2)x & (v8l2){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}); }
 static inline v8d2 d8_load(const double *p) { v8d2 v; memcpy(&v, p, sizeof v); return v; }
 static inline void d8_store(double *p, v8d2 v) { memcpy(p, &v, sizeof v); }
+static inline void v8i_store8(int *p, v8i v) { memcpy(p, &v, sizeof v); }
 
+static inline v8d2 d8_from_float(const float *p) { v8f v; memcpy(&v, p, sizeof v); return __builtin_convertvector(v, v8d2); }
+static inline void d8_to_float(float *p, v8d2 v) { v8f f = __builtin_convertvector(v, v8f); memcpy(p, &f, sizeof f); }
+static inline v8i d8_clamp_tile(v8d2 v, double hi) { /* clamp_tile, 8 lanes */
+  v8d2 c = d8_sel(v > d8_set1(hi), d8_set1(hi), d8_sel(v > d8_set1(0.0), v, d8_set1(0.0)));
+  return __builtin_convertvector(c, v8i);
+}
+
+
+/* The world and camera-space centres of surfels ids[0..nl) (lanes past nl: ids[0]'s), in
+ * double (scenes far from the origin). */
+static void centres16(const mgs_raster *r, const size_t *ids, int nl, double md[3][16], double td[3][16]) {
+  const double *V = r->cam.w2c;
+  for (int l = 0; l < 16; l++)
+    for (int k = 0; k < 3; k++) md[k][l] = r->g->mean[3 * ids[l < nl ? l : 0] + k];
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 m0 = d8_load(md[0] + h), m1 = d8_load(md[1] + h), m2 = d8_load(md[2] + h);
+    for (int k = 0; k < 3; k++)
+      d8_store(td[k] + h, d8_set1(V[4 * k]) * m0 + d8_set1(V[4 * k + 1]) * m1 + d8_set1(V[4 * k + 2]) * m2 + d8_set1(V[4 * k + 3]));
+  }
+}
+
+/* Rotation (mgs_quat_to_mat3f's operations: identity for a zero quaternion), scales and
+ * T = (Tu, Tv, Tw) of 16 surfels from their quaternions q, first two log-scales ls and
+ * camera-space centres td: Tc[a][0..1] = M_a (s0 R e0, s1 R e1), Tc[a][2] the
+ * pixel-homogeneous centre. The projection and the backward both take T from here: the
+ * same T bit for bit. */
+MGS_VINLINE void surfel_T16(const mgs_raster *r, const cam_par *cp, const float q[4][16], const float ls[2][16],
+                            const double td[3][16], v16f R[9], v16f s[2], v16f Tc[3][3]) {
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f), two = v16f_set1(2.0f);
+  v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
+  v16f qn = v16f_sqrt(w * w + x * x + y * y + z * z);
+  v16i nz = qn > zero;
+  v16f qd = v16f_select(nz, qn, one);
+  w = v16f_select(nz, w / qd, one); x = v16f_and(nz, x / qd); y = v16f_and(nz, y / qd); z = v16f_and(nz, z / qd);
+  R[0] = one - two * (y * y + z * z); R[1] = two * (x * y - w * z); R[2] = two * (x * z + w * y);
+  R[3] = two * (x * y + w * z); R[4] = one - two * (x * x + z * z); R[5] = two * (y * z - w * x);
+  R[6] = two * (x * z - w * y); R[7] = two * (y * z + w * x); R[8] = one - two * (x * x + y * y);
+  v16f smod = v16f_set1(r->s.scale_modifier);
+  s[0] = smod * v16f_exp(v16f_load(ls[0]));
+  s[1] = smod * v16f_exp(v16f_load(ls[1]));
+  for (int a = 0; a < 3; a++) {
+    const float *m = cp->M + 3 * a;
+    v16f m0 = v16f_set1(m[0]), m1 = v16f_set1(m[1]), m2 = v16f_set1(m[2]);
+    Tc[a][0] = s[0] * (m0 * R[0] + m1 * R[3] + m2 * R[6]);
+    Tc[a][1] = s[1] * (m0 * R[1] + m1 * R[4] + m2 * R[7]);
+  }
+  const mgs_camera *c = &r->cam;
+  float t2[3][16];
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 t0 = d8_load(td[0] + h), t1 = d8_load(td[1] + h), tz = d8_load(td[2] + h);
+    d8_to_float(t2[0] + h, d8_set1(c->fx) * t0 + d8_set1(c->cx) * tz);
+    d8_to_float(t2[1] + h, d8_set1(c->fy) * t1 + d8_set1(c->cy) * tz);
+    d8_to_float(t2[2] + h, tz);
+  }
+  for (int a = 0; a < 3; a++) Tc[a][2] = v16f_load(t2[a]);
+}
+
+static void cull(mgs_raster *r, size_t i) {
+  r->radii[i] = 0;
+  r->count[i] = 0;
+}
+
+static int clamp_tile(double v, int hi) { return v <= 0 || v != v ? 0 : (v >= hi ? hi : (int)v); }
+
+typedef struct proj_ctx {
+  mgs_raster *r;
+  cam_par cp;
+  const uint32_t *idx;
+} proj_ctx;
+
+/* Where alpha >= 1/255 can hold, i.e. rho = min(rho3, rho2) <= rmax: the ellipse
+ * {rho3 <= rmax} and the filter's disc {rho2 <= rmax} (raster_2dgs.h). With p affine in the
+ * pixel, rho3 <= r is the conic |p.xy|^2 - r p.z^2 <= 0, an ellipse when its quadratic
+ * part is positive definite (p.z keeps one sign inside: p = 0 has no pixel); otherwise (a
+ * surfel seen nearly edge-on) it bounds nothing. Enlarged (r 1 % above rmax, which already
+ * has 0.1 %, and the margins) so that the float per-pixel rho3 of every pixel it leaves out
+ * is above rmax: skipping those pixels changes no value. Tiles of the authors' rect that
+ * miss it are not binned (the same result, as 3DGS's binning). For the binned surfels
+ * blk[0..nl) (project_block stored rmax in rf), in double, 16 lanes in branch-free loops. */
 static void surfel_bounds(mgs_raster *r, const size_t *blk, int nl) {
   mgs_surf2d *surf = mgs_raster2d_surf(r);
   double A[3][16], B[3][16], C[3][16], rmx[16];
@@ -249,7 +208,7 @@ static void block_lanes(const mgs_raster *r, const size_t *blk, int nl, float di
 }
 #endif
 
-/* The SH colours of the surfels blk[0..nl) (project_one passed them; spread below 2^24),
+/* The SH colours of the surfels blk[0..nl) (project_block passed them; spread below 2^24),
  * 16 at once; a non-finite colour culls its surfel. */
 static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
   const mgs_gaussians *g = r->g;
@@ -282,29 +241,157 @@ static void surfel_colours(mgs_raster *r, const size_t *blk, int nl) {
   }
 }
 
+/* A block of up to 16 surfels projected at once (lanes past nl, and culled lanes, hold
+ * benign values and are ignored). The float algebra (rotation, T, the 3-sigma box) runs as
+ * 16-wide vectors, the double parts (camera-space centre, T's centre column, the affine
+ * coefficients, the tile rect, the view direction) as two 8-wide ones. */
+
+static void project_block(const proj_ctx *pc, const size_t *ids, int nl) {
+  mgs_raster *r = pc->r;
+  const mgs_gaussians *g = r->g;
+  const cam_par *cp = &pc->cp;
+  double md[3][16], td[3][16];
+  centres16(r, ids, nl, md, td);
+  /* lane set-up: the early culls, parameters (dead lanes: identity, centre (0, 0, 1)) */
+  int alive[16];
+  float q[4][16], ls[2][16], logit[16];
+  for (int l = 0; l < 16; l++) {
+    int ok = 0;
+    if (l < nl) {
+      size_t i = ids[l];
+      cull(r, i);
+      const float *qq = g->rot + 4 * i;
+      ok = td[2][l] > r->s.near_plane && isfinite(td[0][l]) && isfinite(td[1][l]) && isfinite(td[2][l]) &&
+           isfinite(qq[0] + qq[1] + qq[2] + qq[3]) && isfinite(g->opacity[i]);
+    }
+    alive[l] = ok;
+    size_t i = ids[l < nl ? l : 0];
+    if (!ok) { td[0][l] = td[1][l] = 0; td[2][l] = 1; }
+    for (int k = 0; k < 4; k++) q[k][l] = ok ? g->rot[4 * i + k] : (float)(k == 0);
+    for (int k = 0; k < 2; k++) ls[k][l] = ok ? g->log_scale[3 * i + k] : 0.0f;
+    logit[l] = ok ? g->opacity[i] : 0.0f;
+  }
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f);
+  v16f R[9], sc[2], Tc[3][3];
+  surfel_T16(r, cp, q, ls, td, R, sc, Tc);
+  /* the normal's side, the view direction (double) */
+  float dirl[3][16], distl[16], r2[3][16];
+  double cosv[16];
+  for (int k = 0; k < 3; k++) v16f_store(r2[k], R[3 * k + 2]);
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 dd[3], cv = d8_set1(0.0);
+    for (int k = 0; k < 3; k++) {
+      v8d2 pk = d8_load(md[k] + h);
+      cv = cv + (d8_set1(cp->campos[k]) - pk) * d8_from_float(r2[k] + h);
+      dd[k] = pk - d8_set1(cp->campos[k]);
+    }
+    d8_store(cosv + h, cv);
+    v8d2 dist = d8_sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+    v8l2 pos = dist > d8_set1(0.0);
+    v8d2 dq = d8_sel(pos, dist, d8_set1(1.0));
+    for (int k = 0; k < 3; k++) d8_to_float(dirl[k] + h, d8_sel(pos, dd[k] / dq, d8_set1(0.0)));
+    d8_to_float(distl + h, dist);
+  }
+  /* the 3-sigma box of the ellipse {rho3d = 9} (compute_aabb) */
+  v16f *Tu = Tc[0], *Tv = Tc[1], *Tw = Tc[2];
+  const v16f t0 = v16f_set1(CUTOFF * CUTOFF), t2 = v16f_set1(-1.0f);
+  v16f d = t0 * Tw[0] * Tw[0] + t0 * Tw[1] * Tw[1] + t2 * Tw[2] * Tw[2];
+  v16i dok = (d != zero) & (d - d == zero);
+  v16f dq2 = v16f_select(dok, d, one);
+  v16f f0 = t0 / dq2, f2 = t2 / dq2;
+  v16f cx = f0 * Tu[0] * Tw[0] + f0 * Tu[1] * Tw[1] + f2 * Tu[2] * Tw[2];
+  v16f cy = f0 * Tv[0] * Tw[0] + f0 * Tv[1] * Tw[1] + f2 * Tv[2] * Tw[2];
+  v16f hx0 = cx * cx - (f0 * Tu[0] * Tu[0] + f0 * Tu[1] * Tu[1] + f2 * Tu[2] * Tu[2]);
+  v16f hy0 = cy * cy - (f0 * Tv[0] * Tv[0] + f0 * Tv[1] * Tv[1] + f2 * Tv[2] * Tv[2]);
+  const v16f hmin = v16f_set1(1e-4f), rmin = v16f_set1(CUTOFF * FILTER_SIZE);
+  v16f hx = v16f_sqrt(v16f_select(hx0 > hmin, hx0, hmin)), hy = v16f_sqrt(v16f_select(hy0 > hmin, hy0, hmin));
+  v16f ext = v16f_select(hx > hy, hx, hy);
+  v16f radius = v16f_ceil(v16f_select(ext > rmin, ext, rmin));
+  v16f op = one / (one + v16f_exp(zero - v16f_load(logit)));
+  v16i bok = dok & (cx - cx == zero) & (cy - cy == zero) & (radius - radius == zero) & (radius <= v16f_set1(1e7f));
+  float cxl[16], cyl[16], radl[16], opl[16], T9[9][16];
+  v16f_store(cxl, cx); v16f_store(cyl, cy); v16f_store(radl, radius); v16f_store(opl, op);
+  for (int k = 0; k < 3; k++) { v16f_store(T9[k], Tu[k]); v16f_store(T9[3 + k], Tv[k]); v16f_store(T9[6 + k], Tw[k]); }
+  int32_t boxok[16];
+  v16i_store(boxok, bok);
+  /* the affine p and det T of raster_2dgs.h about (ox, oy), in double from the float T; the
+     reference's getRect */
+  float cf[10][16];
+  int rect[4][16];
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 ox = d8_from_float(cxl + h), oy = d8_from_float(cyl + h), wv[3], u[3], v[3];
+    for (int k = 0; k < 3; k++) {
+      wv[k] = d8_from_float(T9[6 + k] + h);
+      u[k] = d8_from_float(T9[k] + h) - ox * wv[k];
+      v[k] = d8_from_float(T9[3 + k] + h) - oy * wv[k];
+    }
+    v8d2 c[10];
+    c[0] = v[1] * wv[2] - v[2] * wv[1]; c[1] = v[2] * wv[0] - v[0] * wv[2]; c[2] = v[0] * wv[1] - v[1] * wv[0];
+    c[3] = wv[1] * u[2] - wv[2] * u[1]; c[4] = wv[2] * u[0] - wv[0] * u[2]; c[5] = wv[0] * u[1] - wv[1] * u[0];
+    c[6] = u[1] * v[2] - u[2] * v[1]; c[7] = u[2] * v[0] - u[0] * v[2]; c[8] = u[0] * v[1] - u[1] * v[0];
+    c[9] = wv[0] * c[6] + wv[1] * c[7] + wv[2] * c[8];
+    for (int k = 0; k < 10; k++) d8_to_float(cf[k] + h, c[k]);
+    v8d2 rad = d8_from_float(radl + h), px = ox - d8_set1(0.5), py = oy - d8_set1(0.5), ts = d8_set1(1.0 / MGS_TILE_SIZE);
+    v8d2 tm = d8_set1(MGS_TILE_SIZE - 1);
+    v8i_store8(rect[0] + h, d8_clamp_tile((px - rad) * ts, r->tiles_x));
+    v8i_store8(rect[1] + h, d8_clamp_tile((py - rad) * ts, r->tiles_y));
+    v8i_store8(rect[2] + h, d8_clamp_tile((px + rad + tm) * ts, r->tiles_x));
+    v8i_store8(rect[3] + h, d8_clamp_tile((py + rad + tm) * ts, r->tiles_y));
+  }
+  /* per lane: the remaining culls and the stores */
+  size_t blk[16], bb[16];
+  int na = 0, nb = 0;
+  mgs_surf2d *surf = mgs_raster2d_surf(r);
+  mgs_surf2d_cold *cold = mgs_raster2d_cold(r);
+  for (int l = 0; l < nl; l++) {
+    if (!alive[l]) continue;
+    size_t i = ids[l];
+    /* normal towards the camera; a surfel seen exactly edge-on through its centre is culled */
+    if (cosv[l] == 0 || !isfinite(cosv[l]) || !boxok[l]) continue;
+    if ((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]) == 0) continue;
+    mgs_surf2d_cold *cd = cold + i;
+    cd->nsign = cosv[l] > 0 ? 1.0f : -1.0f;
+    for (int k = 0; k < 3; k++) cd->n[k] = cd->nsign * r2[k][l];
+    mgs_surf2d *sf = surf + i;
+    sf->ox = cxl[l];
+    sf->oy = cyl[l];
+    sf->zc = T9[8][l];
+    for (int k = 0; k < 3; k++) { sf->c0[k] = cf[k][l]; sf->c1[k] = cf[3 + k][l]; sf->c2[k] = cf[6 + k][l]; }
+    sf->det = cf[9][l];
+    mgs_proj_aux *ax = &r->aux[i];
+    for (int k = 0; k < 3; k++) { ax->dir[k] = dirl[k][l]; ax->t[k] = (float)td[k][l]; }
+    ax->dist = distl[l];
+    float o = opl[l];
+    sf->opacity = o;
+    mgs_splat *sp = &r->splat[i];
+    memset(sp, 0, sizeof *sp);
+    sp->u = cxl[l]; sp->v = cyl[l]; sp->z = ax->t[2]; sp->opacity = o;
+    r->radii[i] = (int)radl[l];
+    blk[na++] = i;
+    if (o < MGS_ALPHA_MIN) continue; /* alpha < 1/255 everywhere: nothing to bin */
+    sf->rf = 2.0f * logf(o / MGS_ALPHA_MIN) * 1.001f + 1e-4f; /* rmax, until surfel_bounds */
+    uint16_t *rc = r->rect + 4 * i;
+    for (int k = 0; k < 4; k++) rc[k] = (uint16_t)rect[k][l];
+    r->count[i] = (uint32_t)((rect[2][l] - rect[0][l]) * (rect[3][l] - rect[1][l]));
+    bb[nb++] = i;
+  }
+  if (na) surfel_colours(r, blk, na);
+  int nb2 = 0;
+  for (int l = 0; l < nb; l++)
+    if (r->count[bb[l]]) bb[nb2++] = bb[l];
+  if (nb2) surfel_bounds(r, bb, nb2);
+}
+
 static void project_range(void *vctx, size_t b, size_t e) {
   const proj_ctx *pc = vctx;
-  size_t blk[16], bb[16];
-  int nl = 0, nb = 0;
+  size_t ids[16];
+  int nl = 0;
   for (size_t k = b; k < e; k++) {
     size_t i = pc->idx ? pc->idx[k] : k;
-    if (!pc->idx && k + 8 < e) { /* the records are written line by line: claim them ahead */
-      const mgs_raster *r = pc->r;
-      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8), 1);
-      __builtin_prefetch((const char *)(mgs_raster2d_surf(r) + k + 8) + sizeof(mgs_surf2d) - 1, 1);
-      __builtin_prefetch(&r->splat[k + 8], 1);
-      __builtin_prefetch(&r->aux[k + 8], 1);
-    }
-    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours(pc->r, blk, nl); nl = 0; }
-    if (project_one(pc->r, &pc->cp, i)) {
-      blk[nl++] = i;
-      if (pc->r->count[i]) bb[nb++] = i;
-    }
-    if (nb == 16) { surfel_bounds(pc->r, bb, nb); nb = 0; }
-    if (nl == 16) { surfel_colours(pc->r, blk, nl); nl = 0; }
+    if (nl && (nl == 16 || i - ids[0] >= (1u << 24))) { project_block(pc, ids, nl); nl = 0; }
+    ids[nl++] = i;
   }
-  if (nb) surfel_bounds(pc->r, bb, nb);
-  if (nl) surfel_colours(pc->r, blk, nl);
+  if (nl) project_block(pc, ids, nl);
 }
 
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
@@ -317,117 +404,138 @@ void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m) {
   mgs_parallel_for(0, idx ? m : r->n, 256, project_range, &pc);
 }
 
-static void cross_d(const double a[3], const double b[3], double c[3]) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* surf_coeffs backward: dL/d(c0, c1, c2, det) (gs, S2 layout) to dL/d(Tu, Tv, Tw). (ox, oy)
- * only moves the origin p is written about (p itself does not depend on it): a constant. */
-static void coeffs_backward(const float Tu[3], const float Tv[3], const float Tw[3], float ox, float oy, const float *gs,
-                            float dTu[3], float dTv[3], float dTw[3]) {
-  double u[3], v[3], w[3], g0[3], g1[3], g2[3], c2[3], t[3];
-  for (int k = 0; k < 3; k++) {
-    w[k] = Tw[k];
-    u[k] = (double)Tu[k] - (double)ox * w[k];
-    v[k] = (double)Tv[k] - (double)oy * w[k];
-    g0[k] = gs[S2_C0 + k];
-    g1[k] = gs[S2_C1 + k];
-  }
-  cross_d(u, v, c2);
-  /* det = w.c2 */
-  for (int k = 0; k < 3; k++) g2[k] = gs[S2_C2 + k] + (double)gs[S2_DET] * w[k];
-  double du[3], dv[3], dw[3];
-  for (int k = 0; k < 3; k++) dw[k] = (double)gs[S2_DET] * c2[k];
-  /* c2 = u x v: du = v x g2, dv = g2 x u */
-  cross_d(v, g2, du);
-  cross_d(g2, u, dv);
-  /* c0 = v x w (= Tv x Tw): dv += w x g0, dw += g0 x v */
-  cross_d(w, g0, t); for (int k = 0; k < 3; k++) dv[k] += t[k];
-  cross_d(g0, v, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
-  /* c1 = w x u: dw += u x g1, du += g1 x w */
-  cross_d(u, g1, t); for (int k = 0; k < 3; k++) dw[k] += t[k];
-  cross_d(g1, w, t); for (int k = 0; k < 3; k++) du[k] += t[k];
-  /* u = Tu - ox Tw, v = Tv - oy Tw */
-  for (int k = 0; k < 3; k++) {
-    dTu[k] = (float)du[k];
-    dTv[k] = (float)dv[k];
-    dTw[k] = (float)(dw[k] - ox * du[k] - oy * dv[k]);
-  }
-  dTw[2] += gs[S2_ZC]; /* the filter's depth is Tw2 */
-}
-
-/* Backward of one binned surfel but its colour: gs = its summed slots; out: dL/d(unclamped
- * colour) and the mean gradient so far. */
-static void backward_one(mgs_raster *r, const cam_par *cp, size_t i, const float *gs, mgs_gaussians *grad, size_t gbase,
-                         float *grad_mean2d, float drgb_out[3], float dmean_out[3]) {
+/* The backward of the binned surfels blk[0..nl) (spread below 2^24) but their colours, 16
+ * at once: gsl[c][l] = lane l's summed slots (S2 layout; lanes past nl: 0). T comes from
+ * surfel_T16 as in the projection; the double parts (dL/dT from the affine coefficients)
+ * run 8 lanes at a time. Out: dL/d(unclamped colour) and the mean gradient so far. */
+static void backward_block(mgs_raster *r, const cam_par *cp, const size_t *blk, int nl, float gsl[S2_COUNT][16],
+                           mgs_gaussians *grad, size_t gbase, float *grad_mean2d, float drgb[3][16], float dmean[3][16]) {
   const mgs_gaussians *g = r->g;
-  const mgs_surf2d *sf = mgs_raster2d_surf(r) + i;
-  const mgs_proj_aux *ax = &r->aux[i];
-  const double *V = r->cam.w2c;
-  double p[3] = {g->mean[3 * i], g->mean[3 * i + 1], g->mean[3 * i + 2]}, td[3];
-  for (int k = 0; k < 3; k++) td[k] = V[4 * k] * p[0] + V[4 * k + 1] * p[1] + V[4 * k + 2] * p[2] + V[4 * k + 3];
-  float R[9], s[2], Tu[3], Tv[3], Tw[3];
-  surfel_T(r, cp, i, td, R, s, Tu, Tv, Tw);
-  float dTu[3], dTv[3], dTw[3];
-  coeffs_backward(Tu, Tv, Tw, sf->ox, sf->oy, gs, dTu, dTv, dTw);
-  /* the authors' densification signal: dL/dT's centre column times the depth, in NDC */
-  if (grad_mean2d) {
-    float gx = dTu[2] * Tw[2] * 0.5f * (float)r->width, gy = dTv[2] * Tw[2] * 0.5f * (float)r->height;
-    grad_mean2d[i] = sqrtf(gx * gx + gy * gy);
+  const mgs_surf2d *surf = mgs_raster2d_surf(r);
+  const mgs_surf2d_cold *cold = mgs_raster2d_cold(r);
+  double md[3][16], td[3][16];
+  centres16(r, blk, nl, md, td);
+  float q[4][16], ls[2][16], oxl[16], oyl[16], opl[16], nsl[16];
+  for (int l = 0; l < 16; l++) {
+    size_t i = blk[l < nl ? l : 0];
+    for (int k = 0; k < 4; k++) q[k][l] = g->rot[4 * i + k];
+    for (int k = 0; k < 2; k++) ls[k][l] = g->log_scale[3 * i + k];
+    const mgs_surf2d *sf = surf + i;
+    oxl[l] = sf->ox; oyl[l] = sf->oy; opl[l] = sf->opacity; nsl[l] = cold[i].nsign;
   }
-  /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
-  float gcx = gs[S2_OX], gcy = gs[S2_OY];
-  if (gcx != 0 || gcy != 0) {
-    const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
-    float d = t[0] * Tw[0] * Tw[0] + t[1] * Tw[1] * Tw[1] + t[2] * Tw[2] * Tw[2];
-    float gd = -(gcx * sf->ox + gcy * sf->oy) / d;
+  v16f R[9], s[2], Tc[3][3];
+  surfel_T16(r, cp, q, ls, td, R, s, Tc);
+  /* dL/d(c0, c1, c2, det) to dL/d(Tu, Tv, Tw): c0 = v x w, c1 = w x u, c2 = u x v with
+     u = Tu - ox Tw, v = Tv - oy Tw, w = Tw, det = w.c2 ((ox, oy) only moves the origin p
+     is written about: a constant) */
+  float T9[9][16], dT[9][16]; /* Tu, Tv, Tw rows */
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++) v16f_store(T9[3 * a + k], Tc[a][k]);
+  for (int h = 0; h < 16; h += 8) {
+    v8d2 ox = d8_from_float(oxl + h), oy = d8_from_float(oyl + h), u[3], v[3], w[3], g0[3], g1[3], g2[3];
+    v8d2 gdet = d8_from_float(gsl[S2_DET] + h);
     for (int k = 0; k < 3; k++) {
-      float f = t[k] / d;
-      dTu[k] += gcx * f * Tw[k];
-      dTv[k] += gcy * f * Tw[k];
-      dTw[k] += gcx * f * Tu[k] + gcy * f * Tv[k] + gd * 2.0f * t[k] * Tw[k];
+      w[k] = d8_from_float(T9[6 + k] + h);
+      u[k] = d8_from_float(T9[k] + h) - ox * w[k];
+      v[k] = d8_from_float(T9[3 + k] + h) - oy * w[k];
+      g0[k] = d8_from_float(gsl[S2_C0 + k] + h);
+      g1[k] = d8_from_float(gsl[S2_C1 + k] + h);
+      g2[k] = d8_from_float(gsl[S2_C2 + k] + h) + gdet * w[k];
+    }
+#define CROSS(o, a, b)                       \
+  do {                                       \
+    o[0] = a[1] * b[2] - a[2] * b[1];        \
+    o[1] = a[2] * b[0] - a[0] * b[2];        \
+    o[2] = a[0] * b[1] - a[1] * b[0];        \
+  } while (0)
+    v8d2 c2[3], du[3], dv[3], dw[3], t[3];
+    CROSS(c2, u, v);
+    for (int k = 0; k < 3; k++) dw[k] = gdet * c2[k];
+    CROSS(du, v, g2);
+    CROSS(dv, g2, u);
+    CROSS(t, w, g0); for (int k = 0; k < 3; k++) dv[k] = dv[k] + t[k];
+    CROSS(t, g0, v); for (int k = 0; k < 3; k++) dw[k] = dw[k] + t[k];
+    CROSS(t, u, g1); for (int k = 0; k < 3; k++) dw[k] = dw[k] + t[k];
+    CROSS(t, g1, w); for (int k = 0; k < 3; k++) du[k] = du[k] + t[k];
+#undef CROSS
+    for (int k = 0; k < 3; k++) {
+      d8_to_float(dT[k] + h, du[k]);
+      d8_to_float(dT[3 + k] + h, dv[k]);
+      d8_to_float(dT[6 + k] + h, dw[k] - ox * du[k] - oy * dv[k]);
     }
   }
-  /* T columns: M (s0 R e0), M (s1 R e1), the pixel-homogeneous centre */
-  float col[3][3];
-  for (int c = 0; c < 3; c++) { col[c][0] = dTu[c]; col[c][1] = dTv[c]; col[c][2] = dTw[c]; }
-  float gv[3][3]; /* M^T col */
+  const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f), two = v16f_set1(2.0f);
+  v16f dTu[3], dTv[3], dTw[3];
+  for (int k = 0; k < 3; k++) { dTu[k] = v16f_load(dT[k]); dTv[k] = v16f_load(dT[3 + k]); dTw[k] = v16f_load(dT[6 + k]); }
+  dTw[2] += v16f_load(gsl[S2_ZC]); /* the filter's depth is Tw2 */
+  v16f *Tu = Tc[0], *Tv = Tc[1], *Tw = Tc[2];
+  /* the authors' densification signal: dL/dT's centre column times the depth, in NDC */
+  float gm2[16];
+  if (grad_mean2d) {
+    v16f gx = dTu[2] * Tw[2] * v16f_set1(0.5f) * v16f_set1((float)r->width);
+    v16f gy = dTv[2] * Tw[2] * v16f_set1(0.5f) * v16f_set1((float)r->height);
+    v16f_store(gm2, v16f_sqrt(gx * gx + gy * gy));
+  }
+  /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
+  {
+    v16f gcx = v16f_load(gsl[S2_OX]), gcy = v16f_load(gsl[S2_OY]), ox = v16f_load(oxl), oy = v16f_load(oyl);
+    v16i live = (gcx != zero) | (gcy != zero);
+    const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
+    v16f d = v16f_set1(t[0]) * Tw[0] * Tw[0] + v16f_set1(t[1]) * Tw[1] * Tw[1] + v16f_set1(t[2]) * Tw[2] * Tw[2];
+    d = v16f_select(live, d, one);
+    v16f gd = zero - (gcx * ox + gcy * oy) / d;
+    for (int k = 0; k < 3; k++) {
+      v16f f = v16f_set1(t[k]) / d;
+      dTu[k] = v16f_select(live, dTu[k] + gcx * f * Tw[k], dTu[k]);
+      dTv[k] = v16f_select(live, dTv[k] + gcy * f * Tw[k], dTv[k]);
+      dTw[k] = v16f_select(live, dTw[k] + (gcx * f * Tu[k] + gcy * f * Tv[k] + gd * two * v16f_set1(t[k]) * Tw[k]), dTw[k]);
+    }
+  }
+  /* gv = M^T (dTu, dTv, dTw)[column c]; T's columns: M (s0 R e0), M (s1 R e1), the centre
+     (d/dmean = M^T its column: fx t0 + cx t2, fy t1 + cy t2, t2 with t = W p + t) */
+  v16f gv[3][3];
   for (int c = 0; c < 3; c++)
-    for (int k = 0; k < 3; k++) gv[c][k] = cp->M[k] * col[c][0] + cp->M[3 + k] * col[c][1] + cp->M[6 + k] * col[c][2];
-  /* the centre column in camera space is fx t0 + cx t2, fy t1 + cy t2, t2 with t = W p + t:
-     d/dp = W^T (fx g0, fy g1, cx g0 + cy g1 + g2) = M^T g */
-  size_t gi = i - gbase;
-  float dmean[3] = {gv[2][0], gv[2][1], gv[2][2]};
-  float dR[9];
+    for (int k = 0; k < 3; k++)
+      gv[c][k] = v16f_set1(cp->M[k]) * dTu[c] + v16f_set1(cp->M[3 + k]) * dTv[c] + v16f_set1(cp->M[6 + k]) * dTw[c];
+  v16f dR[9], ns = v16f_load(nsl);
   for (int a = 0; a < 3; a++) {
     dR[3 * a] = s[0] * gv[0][a];
     dR[3 * a + 1] = s[1] * gv[1][a];
-    dR[3 * a + 2] = mgs_raster2d_cold(r)[i].nsign * gs[S2_N + a];
+    dR[3 * a + 2] = ns * v16f_load(gsl[S2_N + a]);
   }
-  float ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
-  float ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
-  grad->log_scale[3 * gi] += ds0 * s[0];
-  grad->log_scale[3 * gi + 1] += ds1 * s[1];
-  /* quaternion (normalized inside R) */
-  const float *q = g->rot + 4 * i;
-  float qn2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  if (qn2 > 0) {
-    float qn = sqrtf(qn2), w = q[0] / qn, x = q[1] / qn, y = q[2] / qn, z = q[3] / qn;
-    float gq[4];
-    gq[0] = 2.0f * (-z * dR[1] + y * dR[2] + z * dR[3] - x * dR[5] - y * dR[6] + x * dR[7]);
-    gq[1] = 2.0f * (y * dR[1] + z * dR[2] + y * dR[3] - 2.0f * x * dR[4] - w * dR[5] + z * dR[6] + w * dR[7] - 2.0f * x * dR[8]);
-    gq[2] = 2.0f * (-2.0f * y * dR[0] + x * dR[1] + w * dR[2] + x * dR[3] + z * dR[5] - w * dR[6] + z * dR[7] - 2.0f * y * dR[8]);
-    gq[3] = 2.0f * (-2.0f * z * dR[0] - w * dR[1] + x * dR[2] + w * dR[3] - 2.0f * z * dR[4] + y * dR[5] + x * dR[6] + y * dR[7]);
-    float qd = w * gq[0] + x * gq[1] + y * gq[2] + z * gq[3];
-    float qv[4] = {w, x, y, z};
-    for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += (gq[k] - qv[k] * qd) / qn;
+  v16f ds0 = gv[0][0] * R[0] + gv[0][1] * R[3] + gv[0][2] * R[6];
+  v16f ds1 = gv[1][0] * R[1] + gv[1][1] * R[4] + gv[1][2] * R[7];
+  float gls[2][16], gq[4][16], gop[16];
+  v16f_store(gls[0], ds0 * s[0]);
+  v16f_store(gls[1], ds1 * s[1]);
+  /* quaternion (normalized inside R; a zero one gets no gradient) */
+  {
+    v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
+    v16f qn2 = w * w + x * x + y * y + z * z;
+    v16i pos = qn2 > zero;
+    v16f qn = v16f_sqrt(v16f_select(pos, qn2, one));
+    w = w / qn; x = x / qn; y = y / qn; z = z / qn;
+    v16f g4[4];
+    g4[0] = two * (zero - z * dR[1] + y * dR[2] + z * dR[3] - x * dR[5] - y * dR[6] + x * dR[7]);
+    g4[1] = two * (y * dR[1] + z * dR[2] + y * dR[3] - two * x * dR[4] - w * dR[5] + z * dR[6] + w * dR[7] - two * x * dR[8]);
+    g4[2] = two * (zero - two * y * dR[0] + x * dR[1] + w * dR[2] + x * dR[3] + z * dR[5] - w * dR[6] + z * dR[7] - two * y * dR[8]);
+    g4[3] = two * (zero - two * z * dR[0] - w * dR[1] + x * dR[2] + w * dR[3] - two * z * dR[4] + y * dR[5] + x * dR[6] + y * dR[7]);
+    v16f qd = w * g4[0] + x * g4[1] + y * g4[2] + z * g4[3];
+    v16f qv[4] = {w, x, y, z};
+    for (int k = 0; k < 4; k++) v16f_store(gq[k], v16f_and(pos, (g4[k] - qv[k] * qd) / qn));
   }
-  grad->opacity[gi] += gs[S2_OP] * sf->opacity * (1.0f - sf->opacity);
-  for (int k = 0; k < 3; k++) {
-    drgb_out[k] = ax->clamped[k] ? 0.0f : gs[S2_R + k];
-    dmean_out[k] = dmean[k];
+  v16f op = v16f_load(opl);
+  v16f_store(gop, v16f_load(gsl[S2_OP]) * op * (one - op));
+  for (int k = 0; k < 3; k++) v16f_store(dmean[k], gv[2][k]);
+  for (int l = 0; l < nl; l++) {
+    size_t i = blk[l], gi = i - gbase;
+    if (grad_mean2d) grad_mean2d[i] = gm2[l];
+    grad->log_scale[3 * gi] += gls[0][l];
+    grad->log_scale[3 * gi + 1] += gls[1][l];
+    for (int k = 0; k < 4; k++) grad->rot[4 * gi + k] += gq[k][l];
+    grad->opacity[gi] += gop[l];
+    const mgs_proj_aux *ax = &r->aux[i];
+    for (int k = 0; k < 3; k++) drgb[k][l] = ax->clamped[k] ? 0.0f : gsl[S2_R + k][l];
   }
 }
 
@@ -467,11 +575,20 @@ static void surfel_colours_backward(mgs_raster *r, const size_t *blk, int nl, fl
   }
 }
 
+/* The backward of the surfels blk[0..nl) with the summed slots gsl: geometry, then colour. */
+static void flush_block(mgs_raster *r, const cam_par *cp, const size_t *blk, int nl, float gsl[S2_COUNT][16],
+                        mgs_gaussians *grad, size_t gbase, float *grad_mean2d, float drgb[3][16], float dmean[3][16]) {
+  for (int l = nl; l < 16; l++)
+    for (int c = 0; c < S2_COUNT; c++) gsl[c][l] = 0.0f;
+  backward_block(r, cp, blk, nl, gsl, grad, gbase, grad_mean2d, drgb, dmean);
+  surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase);
+}
+
 void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d) {
   cam_par cp;
   cam_par_init(r, &cp);
   size_t blk[16];
-  float drgb[3][16], dmean[3][16];
+  float drgb[3][16], dmean[3][16], gsl[S2_COUNT][16];
   int nl = 0, st = mgs_raster2d_slot_stride(r), nc = mgs_raster2d_slot_count(r);
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
@@ -492,14 +609,18 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
       for (int c = 0; c < nc; c++) any |= gs[c] != 0;
     }
     if (!any) continue;
-    if (nl && i - blk[0] >= (1u << 24)) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
-    float d3[3], m3[3];
-    backward_one(r, &cp, i, gs, grad, gbase, grad_mean2d, d3, m3);
-    for (int k = 0; k < 3; k++) { drgb[k][nl] = d3[k]; dmean[k][nl] = m3[k]; }
+    if (nl && i - blk[0] >= (1u << 24)) {
+      flush_block(r, &cp, blk, nl, gsl, grad, gbase, grad_mean2d, drgb, dmean);
+      nl = 0;
+    }
+    for (int c = 0; c < S2_COUNT; c++) gsl[c][nl] = gs[c];
     blk[nl++] = i;
-    if (nl == 16) { surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase); nl = 0; }
+    if (nl == 16) {
+      flush_block(r, &cp, blk, nl, gsl, grad, gbase, grad_mean2d, drgb, dmean);
+      nl = 0;
+    }
   }
-  if (nl) surfel_colours_backward(r, blk, nl, drgb, dmean, grad, gbase);
+  if (nl) flush_block(r, &cp, blk, nl, gsl, grad, gbase, grad_mean2d, drgb, dmean);
 }
 
 static int grow(void **p, size_t n, size_t sz) {
@@ -530,6 +651,6 @@ mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *
 }
 
 void mgs_raster2d_free(mgs_raster *r) {
-  free(r->surf); free(r->sgrad); free(r->s_normal); free(r->s_median); free(r->s_dist); free(r->s_m1);
+  free(r->surf); free(r->sgrad); free(r->s_rows); free(r->s_normal); free(r->s_median); free(r->s_dist); free(r->s_m1);
   free(r->s_m2); free(r->s_m0); free(r->s_medid); free(r->s_gmed); free(r->s_gnormal); free(r->s_gdist);
 }

@@ -154,7 +154,9 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
     }
     const mgs_surf2d *sf = &surf[r->isect_idx[j]];
     v16i jid = v16i_set1((int32_t)(j - start + 1));
-    uint32_t rows = row_bits(sf, x0, y0, nrows, ncols) & ~rowdone;
+    uint32_t rb = row_bits(sf, x0, y0, nrows, ncols);
+    if (r->s_rows) r->s_rows[j] = (uint16_t)rb;
+    uint32_t rows = rb & ~rowdone;
     if (!rows) continue;
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
@@ -234,6 +236,15 @@ static void render_range_geo(void *ctx, size_t b, size_t e) {
 
 void mgs_raster2d_render_tiles(mgs_raster *r) {
   size_t nt = (size_t)r->tiles_x * r->tiles_y;
+  /* the row masks for the backward (every intersection it visits, the forward visited);
+     without the memory the backward recomputes them */
+  if (r->n_isect > r->cap_srows) {
+    size_t c = r->n_isect + r->n_isect / 4;
+    uint16_t *q = realloc(r->s_rows, c * sizeof(uint16_t));
+    if (!q) free(r->s_rows);
+    r->s_rows = q;
+    r->cap_srows = q ? c : 0;
+  }
   mgs_parallel_for(0, nt, 1, render_range, r);
   double ev = 0;
   for (size_t t = 0; t < nt; t++) ev += r->tile_evals[t];
@@ -347,7 +358,8 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     isect_cols ic;
     isect_cols_init(sf, X, &ic);
     int touched = 0;
-    for (uint32_t rows = row_bits(sf, x0, y0, nrows, ncols); rows; rows &= rows - 1) {
+    uint32_t rows0 = r->s_rows ? r->s_rows[j] : row_bits(sf, x0, y0, nrows, ncols);
+    for (uint32_t rows = rows0; rows; rows &= rows - 1) {
       int y = __builtin_ctz(rows);
       if ((int32_t)(j - start) >= rowmax[y]) continue;
       evals++;

@@ -94,6 +94,8 @@ struct mgs_raster {
   size_t cap_surf, cap_sgrad, cap_spix;
   void *surf;              /* the surfel records (render/raster_2dgs.h) */
   float *sgrad;            /* the backward's per-intersection slots (render/raster_2dgs.h) */
+  uint16_t *s_rows;        /* per intersection: the forward's row mask (the backward reuses it) */
+  size_t cap_srows;
   float *s_normal, *s_median, *s_dist, *s_m1, *s_m2, *s_m0; /* per pixel (normal: 3) */
   int32_t *s_medid;        /* 1-based tile-list position of the median contributor, 0: none */
   float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */

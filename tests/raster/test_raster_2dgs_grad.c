@@ -3,7 +3,8 @@
  * group of its backward, through every output (colour, alpha, sum w z, median depth,
  * normal, distortion), on random scenes at SH degrees 0..3 and on the edge cases: surfels
  * seen nearly edge-on (the camera almost in their plane), degenerate (tiny and zero)
- * scales, the 0.99 alpha clamp, a scene 1e5 from the origin.
+ * scales, the 0.99 alpha clamp, a scene 1e5 from the origin; and that the 16-lane
+ * projection and per-surfel backward give a surfel the same records in any lane.
  *
  * Loss: L = sum of random weights times every output. Central differences of the float
  * forward, summed in double, at step eps, eps/4, eps/16 or eps/64; a parameter passes within
@@ -492,6 +493,90 @@ static void test_fd_distortion(void) {
   free_case(&c);
 }
 
+/* The projection and the per-surfel backward take 16 surfels at a time (lanes, blocks, a
+ * partial last block). A surfel's records must not depend on its lane: the same scene in
+ * two orders (reversed, then rotated by 5) gives the same image bit for bit and the same
+ * gradients per surfel, on a mix of the edge cases (edge-on, the camera in the plane,
+ * degenerate scales, a zero and a NaN quaternion, one behind the camera, one below
+ * alpha 1/255), at the origin and 1e5 from it. */
+static void lanes_case(const double off[3]) {
+  enum { N = 37 };
+  fd_case a, b;
+  random_case(&a, 800, 3, N);
+  for (size_t i = 0; i < N; i++) a.g->log_scale[3 * i + 2] = MGS_SURFEL_LOG_SCALE2;
+  const double tilts[5] = {0.01, -0.02, 0.0, 1e-5, 0.3};
+  for (size_t i = 0; i < 5; i++) set_tilt(&a, 3 + 7 * i, tilts[i]);
+  a.g->log_scale[3 * 8] = (float)log(1e-6);
+  a.g->log_scale[3 * 9] = a.g->log_scale[3 * 9 + 1] = -120.0f;
+  for (int k = 0; k < 4; k++) a.g->rot[4 * 11 + k] = 0.0f;
+  a.g->rot[4 * 12 + 1] = NAN;
+  a.g->opacity[13] = -7.0f;
+  double eye[3];
+  mgs_camera_center(&a.cam, eye);
+  for (int k = 0; k < 3; k++) a.g->mean[3 * 14 + k] = (float)(2.0 * eye[k]); /* behind the camera */
+  for (size_t i = 0; i < N; i++)
+    for (int k = 0; k < 3; k++) a.g->mean[3 * i + k] = (float)(floor(a.g->mean[3 * i + k] * 64.0 + 0.5) / 64.0 + off[k]);
+  double c2w[16];
+  memcpy(c2w, a.cam.c2w, sizeof c2w);
+  for (int k = 0; k < 3; k++) c2w[4 * k + 3] += off[k];
+  mgs_camera_set_c2w_opencv(&a.cam, c2w);
+  random_case(&b, 800, 3, N);
+  b.cam = a.cam;
+  size_t perm[N]; /* b's surfel perm[i] is a's surfel i */
+  for (size_t i = 0; i < N; i++) perm[i] = (N - 1 - i + 5) % N;
+  for (int grp = 0; grp < MGS_PARAM_COUNT; grp++) {
+    size_t dim = mgs_param_dim((mgs_param_group)grp);
+    float *pa = mgs_gaussians_group(a.g, (mgs_param_group)grp), *pb = mgs_gaussians_group(b.g, (mgs_param_group)grp);
+    for (size_t i = 0; i < N; i++) memcpy(pb + dim * perm[i], pa + dim * i, dim * sizeof(float));
+  }
+  float *gma = calloc(N, sizeof(float)), *gmb = calloc(N, sizeof(float));
+  mgs_gaussians *da = analytic(&a, gma), *db = analytic(&b, gmb);
+  mgs_raster_output oa, ob;
+  mgs_error err;
+  CHECK_OK(mgs_raster_forward(a.r, a.g, &a.cam, &a.s, &oa, &err), &err);
+  size_t np = (size_t)oa.width * oa.height;
+  float *ca = malloc(np * 5 * sizeof(float));
+  memcpy(ca, oa.color, 3 * np * sizeof(float));
+  memcpy(ca + 3 * np, oa.alpha, np * sizeof(float));
+  memcpy(ca + 4 * np, oa.depth, np * sizeof(float));
+  CHECK_OK(mgs_raster_forward(b.r, b.g, &b.cam, &b.s, &ob, &err), &err);
+  size_t img_diff = 0, grad_diff = 0, vis = 0;
+  double asum = 0;
+  for (size_t p = 0; p < np; p++) {
+    for (int k = 0; k < 3; k++) img_diff += ca[3 * p + k] != ob.color[3 * p + k];
+    img_diff += (ca[3 * np + p] != ob.alpha[p]) + (ca[4 * np + p] != ob.depth[p]);
+    asum += ob.alpha[p];
+  }
+  for (size_t i = 0; i < N; i++) {
+    vis += oa.radii[i] > 0;
+    CHECK_MSG(oa.radii[i] == ob.radii[perm[i]], "lanes: surfel %zu's radius %d in one order, %d in the other", i,
+              oa.radii[i], ob.radii[perm[i]]);
+    grad_diff += memcmp(&gma[i], &gmb[perm[i]], sizeof(float)) != 0;
+    for (int grp = 0; grp < MGS_PARAM_COUNT; grp++) {
+      size_t dim = mgs_param_dim((mgs_param_group)grp);
+      const float *ga = mgs_gaussians_group(da, (mgs_param_group)grp), *gb = mgs_gaussians_group(db, (mgs_param_group)grp);
+      for (size_t k = 0; k < dim; k++) grad_diff += ga[dim * i + k] != gb[dim * perm[i] + k];
+    }
+  }
+  fprintf(stderr, "  lanes (offset %g): %zu of %d surfels visible, sum alpha %.4g, %zu pixel values and %zu gradients differ\n",
+          off[0], vis, N, asum, img_diff, grad_diff);
+  CHECK(vis >= 20 && asum > 1.0);
+  CHECK(oa.radii[12] == 0 && oa.radii[14] == 0);
+  CHECK_MSG(img_diff == 0, "lanes: %zu pixel values depend on the surfels' order", img_diff);
+  CHECK_MSG(grad_diff == 0, "lanes: %zu gradients depend on the surfels' order", grad_diff);
+  CHECK_OK(mgs_gaussians_check_finite(da, &err), &err);
+  free(ca); free(gma); free(gmb);
+  mgs_gaussians_destroy(da); mgs_gaussians_destroy(db);
+  free_case(&a);
+  free_case(&b);
+}
+
+static void test_lanes(void) {
+  const double zero[3] = {0, 0, 0}, far[3] = {1e5, -1e5, 1e5};
+  lanes_case(zero);
+  lanes_case(far);
+}
+
 int main(void) {
   RUN(test_forward_vs_ray);
   RUN(test_fd_sh_degrees);
@@ -500,5 +585,6 @@ int main(void) {
   RUN(test_fd_alpha_clamp);
   RUN(test_fd_far);
   RUN(test_fd_distortion);
+  RUN(test_lanes);
   return mgs_test_finish();
 }

@@ -6,20 +6,22 @@
 #   baseline, morse-r, morse-full                      3DGS and MorseGS on it
 #   2dgs, 2dgs-morse-r (measured against 2dgs)         MorseGS' loss on 2DGS
 #   mini-splatting, ms-morse-r (against mini-splatting) MorseGS' loss on Mini-Splatting
-#   sugar, gaussianpro                                 the other two baselines
-# SuGaR and GaussianPro (no MorseGS variant sits on them) with SEEDS_OTHER (3) seeds.
-# H3's Pareto fronts: baseline and mini-splatting swept (--grad-threshold ×{0.25,0.5,2,4}).
+#   sugar, gaussianpro, topology-gs                    the other baselines
+#   morse-d, morse-i                                   MorseGS' other components on 3DGS
+# SuGaR, GaussianPro and Topology-GS (no MorseGS variant sits on them) with SEEDS_OTHER (3)
+# seeds. H3's Pareto fronts (SWEEP_VARIANTS): baseline and mini-splatting swept by
+# --grad-threshold, morse-d by its spawning knob --gap-max, each ×{0.25,0.5,2,4}.
 # Resumable: finished runs are kept and a run cut off continues from its checkpoint (a
 # session's processes end when it stops). Cost (2-core machine): a 7500-iteration 200² 3DGS
 # run is ~5 CPU-minutes plus ~1.5 for its EVALS (2) evaluation points, 2DGS ~3× the
-# training, so the default plan (5 scenes × (7 variants × 5 seeds + 2 × 3 seeds) + 2 × 4 × 5
-# scenes × 3 sweep seeds = 325 runs) is about 39 CPU-hours (PLAN=1 prints the estimate):
+# training, so the default plan (5 scenes × (9 variants × 5 seeds + 3 × 3 seeds) + 3 × 4 × 5
+# scenes × 3 sweep seeds = 450 runs) is about 55 CPU-hours (PLAN=1 prints the estimate):
 # run it where there are cores, or over several sessions; the proposal's baselines come
 # first in each seed and runs go seed by seed over every scene, so a run stopped early has
 # every scene and variant with its first seeds.
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS (2), VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
-# SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), MORSEGS (a frozen binary for a run spread over days),
+# SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), SWEEP_VARIANTS, MORSEGS (a frozen binary for a run spread over days),
 # MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
 # runs and the estimated time, train nothing).
 set -euo pipefail
@@ -53,7 +55,8 @@ MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data
   --variant mini-splatting="--strategy mini-splatting" \
   --variant ms-morse-r="--strategy mini-splatting --preset morse-r" \
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
-  --variants baseline,2dgs,mini-splatting,sugar,gaussianpro,morse-r,2dgs-morse-r,ms-morse-r,morse-full \
+  --variants baseline,2dgs,mini-splatting,sugar,gaussianpro,topology-gs,morse-r,2dgs-morse-r,ms-morse-r,morse-full,morse-d,morse-i \
   --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
   --variant-seeds sugar="${SEEDS_OTHER:-3}" --variant-seeds gaussianpro="${SEEDS_OTHER:-3}" \
-  --sweep-variants baseline,mini-splatting --jobs "${JOBS:-2}" ${PLAN:+--plan}
+  --variant-seeds topology-gs="${SEEDS_OTHER:-3}" \
+  --sweep-variants "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}" --jobs "${JOBS:-2}" ${PLAN:+--plan}

@@ -36,7 +36,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
 
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], K[MGS_TILE_SIZE];
   v16f G0[MGS_TILE_SIZE], G1[MGS_TILE_SIZE], G2[MGS_TILE_SIZE], GD[MGS_TILE_SIZE];
-  v16f GN0[nrm ? MGS_TILE_SIZE : 1], GN1[nrm ? MGS_TILE_SIZE : 1], GN2[nrm ? MGS_TILE_SIZE : 1];
+  v16f GN0[MGS_TILE_SIZE], GN1[MGS_TILE_SIZE], GN2[MGS_TILE_SIZE]; /* dL/dN (nrm only) */
   v16i NC[MGS_TILE_SIZE];
   const float *bg = r->s.background;
   int32_t maxn = 0, rowmax[MGS_TILE_SIZE];
@@ -97,7 +97,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     v16f A = v16f_set1(sp->A), B = v16f_set1(sp->B), C = v16f_set1(sp->C);
     v16f Adx = A * dx, Bdx = B * dx, dx2 = dx * dx;
     v16f cr = v16f_set1(sp->rgb[0]), cg = v16f_set1(sp->rgb[1]), cb = v16f_set1(sp->rgb[2]), cz = v16f_set1(sp->z);
-    v16f nx = cz, ny = cz, nz = cz;
+    v16f nx = zero, ny = zero, nz = zero; /* the Gaussian's normal (nrm only) */
     if (nrm) {
       const float *gnv = r->map_gnormal + 3 * (size_t)r->isect_idx[j];
       nx = v16f_set1(gnv[0]); ny = v16f_set1(gnv[1]); nz = v16f_set1(gnv[2]);
@@ -146,7 +146,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     v16f sums = zero;
     for (int c = 0; c < (nrm ? GS_NZ + 1 : GS_N); c++) sums[c] = v16f_sum(ac[c]);
     /* dG/dA = -G dx^2/2, dG/dB = -G dx dy, dG/dC = -G dy^2/2 */
-    v16f_store(out, sums * fac); /* lanes from GS_N on are 0 */
+    v16f_store(out, sums * fac); /* lanes from GS_N (GS_NZ + 1 with nrm) on are 0 */
   }
   r->tile_evals[tile] = evals;
 }

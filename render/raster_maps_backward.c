@@ -19,11 +19,11 @@ void mgs_raster_normal_rot_grad(const mgs_raster *r, size_t i, const float gn[3]
   const float *n = r->map_gnormal + 3 * i, *ls = r->g->log_scale + 3 * i, *q = r->g->rot + 4 * i;
   int k = ls[0] <= ls[1] ? (ls[0] <= ls[2] ? 0 : 2) : (ls[1] <= ls[2] ? 1 : 2);
   /* the sign the forward applied: n = s R e_k, so s = n . (R e_k) */
+  float qn2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (!(qn2 > 0) || (n[0] == 0 && n[1] == 0 && n[2] == 0)) return; /* identity for a zero quaternion; culled */
   float R[9];
   mgs_quat_to_mat3f(q, R);
   float s = n[0] * R[k] + n[1] * R[3 + k] + n[2] * R[6 + k] < 0 ? -1.0f : 1.0f;
-  float qn2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  if (!(qn2 > 0) || (n[0] == 0 && n[1] == 0 && n[2] == 0)) return; /* identity for a zero quaternion; culled */
   /* dL/dR (row-major) is s gn in column k, 0 elsewhere; then through the quaternion's
    * rotation matrix and its normalization (as raster_project.c's backward) */
   float dR[9] = {0};

@@ -149,12 +149,15 @@ mgs_status mgs_raster_forward_list(mgs_raster *r, const mgs_gaussians *g, const 
  * The forward's model must be unchanged. Valid until the next forward on this context. */
 mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, mgs_error *err);
 
-/* 2DGS only: gradient arrays of the loss w.r.t. the last forward's geometry maps
- * (height*width each; normal 3 per pixel, world space), zeroed at the first call after a
- * forward; loss terms add into them, and the backward of that forward reads them.
- * depth_median: dL/d(the median depth map of mgs_raster_maps, 0 where alpha < 0.5: no
- * gradient there); normal: dL/d(sum_i w_i n_i); distortion: dL/d(distortion). A 3DGS
- * forward gives MGS_ERR_ARG. */
+/* Gradient arrays of the loss w.r.t. the last forward's geometry maps (height*width each;
+ * normal 3 per pixel, world space), zeroed at the first call after a forward; loss terms
+ * add into them, and the backward of that forward reads them. depth_median: dL/d(the
+ * median depth map of mgs_raster_maps, 0 where alpha < 0.5: no gradient there); normal:
+ * dL/d(sum_i w_i n_i); distortion: dL/d(distortion). A 3DGS forward hands out the normal
+ * only (depth_median and distortion NULL): its gradient reaches opacity, means, scales and
+ * rotations through the blending weights and the rotations through n_i (the smallest
+ * axis: no derivative w.r.t. the scales that choose it nor the mean that turns it, see
+ * render/raster_maps_backward.c); a backward not preceded by this call costs what it did. */
 typedef struct mgs_raster_map_grad {
   float *depth_median, *normal, *distortion;
 } mgs_raster_map_grad;

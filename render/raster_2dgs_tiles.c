@@ -457,8 +457,9 @@ mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, co
 
 mgs_status mgs_raster_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_error *err) {
   if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_2dgs_tiles.c: NULL argument");
-  if (!r->have_forward || !r->surfel)
-    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_2dgs_tiles.c: map gradients need a forward of a 2DGS model");
+  if (!r->have_forward)
+    return mgs_error_set(err, MGS_ERR_ARG, "render/raster_2dgs_tiles.c: map gradients need a forward on this context");
+  if (!r->surfel) return mgs_raster3d_map_grads(r, out, err); /* 3DGS: the normal only */
   size_t npix = (size_t)r->width * r->height;
   mgs_raster2d_geometry(r); /* their backward reads the geometry pass's sums */
   if (!r->s_grad_live) {

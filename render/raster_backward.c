@@ -11,6 +11,7 @@
 typedef struct bwd_ctx {
   mgs_raster *r;
   const float *dL_dcolor, *dL_dalpha, *dL_ddepth;
+  const float *dL_dnormal; /* 3 per pixel (the normal map's gradient, raster_maps_backward.c) or NULL */
   mgs_gaussians *grad;
   float *grad_mean2d;
 } bwd_ctx;
@@ -19,8 +20,10 @@ typedef struct bwd_ctx {
  * the pixel's output gradient) and S_i = sum_{j>i} val_j alpha_j T_j (what lies behind i):
  *   dL/dalpha_i = T_i val_i - (S_i + T_final (bg.dL/dcolor - dL/dalpha_out)) / (1 - alpha_i)
  * the reference's recurrence (accum_rec, last_alpha, last_color) folded into one scalar
- * state S, so a pixel carries only T and S back to front. */
-static void backward_tile(const bwd_ctx *bc, size_t tile) {
+ * state S, so a pixel carries only T and S back to front. With a normal-map gradient
+ * (nrm), val_i also holds n_i.dL/dN and the slot's GS_NX.. lanes sum w dL/dN (a separate
+ * instance of the kernel: the training iteration's is unchanged). */
+static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_ctx *bc, size_t tile, const int nrm) {
   mgs_raster *r = bc->r;
   const int W = r->width, H = r->height;
   int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
@@ -33,14 +36,16 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
 
   v16f T[MGS_TILE_SIZE], S[MGS_TILE_SIZE], K[MGS_TILE_SIZE];
   v16f G0[MGS_TILE_SIZE], G1[MGS_TILE_SIZE], G2[MGS_TILE_SIZE], GD[MGS_TILE_SIZE];
+  v16f GN0[MGS_TILE_SIZE], GN1[MGS_TILE_SIZE], GN2[MGS_TILE_SIZE]; /* dL/dN (nrm only) */
   v16i NC[MGS_TILE_SIZE];
   const float *bg = r->s.background;
   int32_t maxn = 0, rowmax[MGS_TILE_SIZE];
   for (int y = 0; y < MGS_TILE_SIZE; y++) {
-    float tf[16], g0[16], g1[16], g2[16], gd[16], k[16];
+    float tf[16], g0[16], g1[16], g2[16], gd[16], k[16], gn[3][16];
     int32_t nc[16];
     for (int x = 0; x < 16; x++) {
       tf[x] = 1; g0[x] = g1[x] = g2[x] = gd[x] = k[x] = 0; nc[x] = 0;
+      if (nrm) gn[0][x] = gn[1][x] = gn[2][x] = 0;
     }
     if (y < nrows) {
       size_t p = (size_t)(y0 + y) * W + x0;
@@ -51,6 +56,8 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
         if (nc[x] > maxn) maxn = nc[x];
         g0[x] = dc[0]; g1[x] = dc[1]; g2[x] = dc[2];
         gd[x] = bc->dL_ddepth ? bc->dL_ddepth[p + x] : 0.0f;
+        if (nrm)
+          for (int c = 0; c < 3; c++) gn[c][x] = bc->dL_dnormal[3 * (p + x) + c];
         /* colour = ... + T_final bg, alpha_out = 1 - T_final: both through T_final */
         k[x] = tf[x] * (bg[0] * dc[0] + bg[1] * dc[1] + bg[2] * dc[2] - (bc->dL_dalpha ? bc->dL_dalpha[p + x] : 0.0f));
       }
@@ -59,6 +66,7 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
     S[y] = v16f_set1(0.0f);
     K[y] = v16f_load(k);
     G0[y] = v16f_load(g0); G1[y] = v16f_load(g1); G2[y] = v16f_load(g2); GD[y] = v16f_load(gd);
+    if (nrm) { GN0[y] = v16f_load(gn[0]); GN1[y] = v16f_load(gn[1]); GN2[y] = v16f_load(gn[2]); }
     NC[y] = v16i_load(nc);
     rowmax[y] = 0;
     for (int x = 0; x < 16; x++) rowmax[y] = nc[x] > rowmax[y] ? nc[x] : rowmax[y];
@@ -89,9 +97,14 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
     v16f A = v16f_set1(sp->A), B = v16f_set1(sp->B), C = v16f_set1(sp->C);
     v16f Adx = A * dx, Bdx = B * dx, dx2 = dx * dx;
     v16f cr = v16f_set1(sp->rgb[0]), cg = v16f_set1(sp->rgb[1]), cb = v16f_set1(sp->rgb[2]), cz = v16f_set1(sp->z);
+    v16f nx = zero, ny = zero, nz = zero; /* the Gaussian's normal (nrm only) */
+    if (nrm) {
+      const float *gnv = r->map_gnormal + 3 * (size_t)r->isect_idx[j];
+      nx = v16f_set1(gnv[0]); ny = v16f_set1(gnv[1]); nz = v16f_set1(gnv[2]);
+    }
     v16i jid = v16i_set1((int32_t)(j - start));
-    v16f ac[GS_N];
-    for (int c = 0; c < GS_N; c++) ac[c] = zero;
+    v16f ac[GS_NZ + 1];
+    for (int c = 0; c < (nrm ? GS_NZ + 1 : GS_N); c++) ac[c] = zero;
     for (int y = lo; y <= hi; y++) {
       if ((int32_t)(j - start) >= rowmax[y]) continue; /* behind every last contributor of the row */
       evals++;
@@ -109,6 +122,11 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
       ac[GS_R] = v16f_fma(wgt, G0[y], ac[GS_R]); ac[GS_G] = v16f_fma(wgt, G1[y], ac[GS_G]);
       ac[GS_B] = v16f_fma(wgt, G2[y], ac[GS_B]); ac[GS_Z] = v16f_fma(wgt, GD[y], ac[GS_Z]);
       v16f val = v16f_fma(cr, G0[y], v16f_fma(cg, G1[y], v16f_fma(cb, G2[y], cz * GD[y])));
+      if (nrm) {
+        val = v16f_fma(nx, GN0[y], v16f_fma(ny, GN1[y], v16f_fma(nz, GN2[y], val)));
+        ac[GS_NX] = v16f_fma(wgt, GN0[y], ac[GS_NX]); ac[GS_NY] = v16f_fma(wgt, GN1[y], ac[GS_NY]);
+        ac[GS_NZ] = v16f_fma(wgt, GN2[y], ac[GS_NZ]);
+      }
       v16f Sy = S[y];
       v16f dLda = Tn * val - (Sy + K[y]) * inv;
       S[y] = v16f_fma(val, wgt, Sy);
@@ -126,22 +144,25 @@ static void backward_tile(const bwd_ctx *bc, size_t tile) {
     /* one horizontal sum each (a transposing reduction tree would be cheaper but rounds
        differently, and training is chaotic enough to amplify that into other results) */
     v16f sums = zero;
-    for (int c = 0; c < GS_N; c++) sums[c] = v16f_sum(ac[c]);
+    for (int c = 0; c < (nrm ? GS_NZ + 1 : GS_N); c++) sums[c] = v16f_sum(ac[c]);
     /* dG/dA = -G dx^2/2, dG/dB = -G dx dy, dG/dC = -G dy^2/2 */
-    v16f_store(out, sums * fac); /* lanes from GS_N on are 0 */
+    v16f_store(out, sums * fac); /* lanes from GS_N (GS_NZ + 1 with nrm) on are 0 */
   }
   r->tile_evals[tile] = evals;
 }
 
 static void backward_range(void *ctx, size_t b, size_t e) {
-  for (size_t t = b; t < e; t++) backward_tile(ctx, t);
+  for (size_t t = b; t < e; t++) backward_tile_impl(ctx, t, 0);
+}
+static void backward_range_normal(void *ctx, size_t b, size_t e) {
+  for (size_t t = b; t < e; t++) backward_tile_impl(ctx, t, 1);
 }
 
 void mgs_raster_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
                                const float *dL_ddepth) {
-  bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, NULL};
+  bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, r->map_grad_live ? r->map_gnormal_grad : NULL, NULL, NULL};
   size_t nt = (size_t)r->tiles_x * r->tiles_y;
-  mgs_parallel_for(0, nt, 1, backward_range, &bc);
+  mgs_parallel_for(0, nt, 1, bc.dL_dnormal ? backward_range_normal : backward_range, &bc);
   double ev = 0;
   for (size_t t = 0; t < nt; t++) ev += r->tile_evals[t];
   r->evals_bwd = ev * 16.0;
@@ -156,6 +177,7 @@ static void reduce_span(const bwd_ctx *bc, size_t b, size_t e, mgs_gaussians *gr
   uint32_t idx[16];
   float gsum[GS_N][16];
   int nl = 0;
+  const int ngrad = r->map_grad_live; /* the slots hold the normal's lanes too */
   for (size_t i = b; i < e; i++) {
     uint32_t cnt = r->count[i];
     if (!cnt) continue;
@@ -172,6 +194,7 @@ static void reduce_span(const bwd_ctx *bc, size_t b, size_t e, mgs_gaussians *gr
     if (!v16i_any(((v16i)acc << 1) != 0)) continue;
     float gs[16];
     v16f_store(gs, acc);
+    if (ngrad) mgs_raster_normal_rot_grad(r, i, gs + GS_NX, grad->rot + 4 * (i - gbase));
     idx[nl] = (uint32_t)i;
     for (int c = 0; c < GS_N; c++) gsum[c][nl] = gs[c];
     if (++nl == 16) {
@@ -268,7 +291,7 @@ mgs_status mgs_raster_backward(mgs_raster *r, const float *dL_dcolor, const floa
   if (grad->n != r->n || grad->sh_degree < r->s.sh_degree)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: gradient model has %zu Gaussians (SH %d), "
                          "the forward had %zu (SH %d)", grad->n, grad->sh_degree, r->n, r->s.sh_degree);
-  bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, grad, grad_mean2d};
+  bwd_ctx bc = {r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad, grad_mean2d};
   r->bwd_kind = 1;
   r->bwd_visible_only = 0;
   return backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, r->n, 1024, reduce_range, &bc, err);
@@ -299,7 +322,7 @@ static mgs_status backward_sink(mgs_raster *r, mgs_gaussians *model, const float
   if (model != r->g || model->n != r->n)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_backward.c: the model is not the forward's (%zu Gaussians, "
                          "the forward had %zu)", model->n, r->n);
-  sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, grad_mean2d}, sink, sink_ctx, visible_only};
+  sink_run sc = {{r, dL_dcolor, dL_dalpha, dL_ddepth, NULL, NULL, grad_mean2d}, sink, sink_ctx, visible_only};
   r->bwd_kind = 2;
   r->bwd_visible_only = visible_only;
   st = backward_run(r, dL_dcolor, dL_dalpha, dL_ddepth, grad_mean2d, (r->n + SINK_BLOCK - 1) / SINK_BLOCK, 16, sink_range,

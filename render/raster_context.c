@@ -27,7 +27,7 @@ static void free_all(mgs_raster *r) {
   free(r->isect_idx); free(r->isect_slot); free(r->isect_grad);
   free(r->tile_start); free(r->chunk_cnt); free(r->tile_evals); free(r->tile_visit);
   free(r->out_color); free(r->out_alpha); free(r->out_depth); free(r->final_T); free(r->n_contrib);
-  free(r->map_gnormal); free(r->map_expected); free(r->map_median); free(r->map_normal);
+  free(r->map_gnormal); free(r->map_expected); free(r->map_median); free(r->map_normal); free(r->map_gnormal_grad);
   mgs_raster2d_free(r);
   mgs_raster_blend_free(r);
 }
@@ -107,7 +107,7 @@ mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_erro
   }
   if (pix > r->cap_map_pix) {
     if (!grow((void **)&r->map_expected, pix, sizeof(float)) || !grow((void **)&r->map_median, pix, sizeof(float)) ||
-        !grow((void **)&r->map_normal, 3 * pix, sizeof(float)))
+        !grow((void **)&r->map_normal, 3 * pix, sizeof(float)) || !grow((void **)&r->map_gnormal_grad, 3 * pix, sizeof(float)))
       return mgs_error_set(err, MGS_ERR_NOMEM, "render/raster_context.c: out of memory for %zu pixels of maps", pix);
     r->cap_map_pix = pix;
   }

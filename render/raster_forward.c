@@ -201,6 +201,8 @@ static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camer
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: %zu Gaussians exceed the 2^32 limit", g->n);
   r->have_forward = 0;
   r->bwd_kind = 0;
+  r->map_gn_valid = 0;
+  r->map_grad_live = 0;
   r->g = g;
   r->cam = *cam;
   r->s = *s;

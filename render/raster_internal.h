@@ -35,6 +35,9 @@ typedef struct mgs_proj_aux {
 
 /* Sum over one tile's pixels of the gradient w.r.t. one splat's values. */
 enum { GS_R, GS_G, GS_B, GS_Z, GS_OP, GS_U, GS_V, GS_A, GS_B2, GS_C, GS_N };
+/* With a normal-map gradient (raster_maps_backward.c): sum over the tile of w dL/dN, the
+ * gradient w.r.t. the Gaussian's unit normal, in the slot's lanes after GS_N. */
+enum { GS_NX = GS_N, GS_NY, GS_NZ };
 /* Floats per intersection gradient slot: one aligned cache line (the slots are written in
  * random order; a 44-byte slot would straddle two lines most of the time). */
 #define GS_STRIDE 16
@@ -88,6 +91,9 @@ struct mgs_raster {
   size_t cap_map_n, cap_map_pix;
   float *map_gnormal;      /* per Gaussian: unit normal facing the camera (3) */
   float *map_expected, *map_median, *map_normal;
+  float *map_gnormal_grad; /* 3DGS: dL/d(normal map), 3 per pixel, handed out by mgs_raster_map_grads */
+  int map_gn_valid;        /* map_gnormal holds this forward's normals */
+  int map_grad_live;       /* 3DGS: the normal-map gradient was handed out since the forward */
 
   /* 2DGS (raster_2dgs_*.c): set when the forward's model is MGS_MODEL_2DGS */
   int surfel;
@@ -143,6 +149,12 @@ double mgs_raster_cpu_now(void); /* process CPU time, seconds */
 mgs_status mgs_raster_reserve(mgs_raster *r, size_t n, size_t tiles, size_t pix, mgs_error *err);
 mgs_status mgs_raster_reserve_isect(mgs_raster *r, size_t n_isect, mgs_error *err);
 mgs_status mgs_raster_reserve_maps(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
+/* raster_maps.c: each Gaussian's unit normal facing the camera into map_gnormal (once per forward) */
+void mgs_raster_gauss_normals(mgs_raster *r);
+/* raster_maps_backward.c: the 3DGS normal map's gradient w.r.t. Gaussian i's quaternion,
+ * from gn = sum over pixels of w dL/dN (the slot's GS_NX..GS_NZ), added into dq */
+void mgs_raster_normal_rot_grad(const mgs_raster *r, size_t i, const float gn[3], float *dq);
+mgs_status mgs_raster3d_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_error *err);
 /* raster_blend.c */
 void mgs_raster_blend_free(mgs_raster *r);
 

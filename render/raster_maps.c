@@ -16,7 +16,7 @@ typedef struct maps_ctx {
 } maps_ctx;
 
 static void gauss_normals(void *vctx, size_t b, size_t e) {
-  mgs_raster *r = ((maps_ctx *)vctx)->r;
+  mgs_raster *r = vctx;
   const mgs_gaussians *g = r->g;
   const double cc[3] = {r->cam.c2w[3], r->cam.c2w[7], r->cam.c2w[11]};
   for (size_t i = b; i < e; i++) {
@@ -33,6 +33,12 @@ static void gauss_normals(void *vctx, size_t b, size_t e) {
     float s = dot < 0 ? -1.0f : 1.0f;
     for (int c = 0; c < 3; c++) n[c] = s * a[c];
   }
+}
+
+void mgs_raster_gauss_normals(mgs_raster *r) {
+  if (r->map_gn_valid) return;
+  mgs_parallel_for(0, r->n, 1024, gauss_normals, r);
+  r->map_gn_valid = 1;
 }
 
 /* One tile: the forward's compositing, accumulating the median depth and w n. */
@@ -130,7 +136,7 @@ mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, 
     return MGS_OK;
   }
   maps_ctx c = {r, which};
-  if (which & MGS_MAP_NORMAL) mgs_parallel_for(0, r->n, 1024, gauss_normals, &c);
+  if (which & MGS_MAP_NORMAL) mgs_raster_gauss_normals(r);
   if (which & (MGS_MAP_NORMAL | MGS_MAP_DEPTH_MEDIAN))
     mgs_parallel_for(0, (size_t)r->tiles_x * r->tiles_y, 1, maps_range, &c);
   if (which & MGS_MAP_DEPTH_MEDIAN) out->depth_median = r->map_median;

@@ -48,6 +48,7 @@ struct mgs_gpro {
   const mgs_view *views;
   size_t n;
   float **depth; /* per view: its propagated depth (0 = none), NULL until matched */
+  float **normal; /* per view matched as the reference: its accepted propagated normals (0 = none) */
   uint8_t *checked; /* per view: 1 when matched as the reference (depth then 0 where fewer
                        than 2 neighbours agree), 0 when only as a neighbour */
   mgs_raster *raster;
@@ -63,9 +64,10 @@ mgs_status mgs_gpro_create(const mgs_gpro_options *o, const mgs_view *views, siz
                          o->every, o->patch_size, o->neighbors, o->stride);
   mgs_gpro *p = calloc(1, sizeof *p);
   if (p) p->depth = calloc(n_views ? n_views : 1, sizeof *p->depth);
+  if (p) p->normal = calloc(n_views ? n_views : 1, sizeof *p->normal);
   if (p) p->checked = calloc(n_views ? n_views : 1, 1);
-  if (p && p->depth && p->checked) p->raster = mgs_raster_create();
-  if (!p || !p->depth || !p->checked || !p->raster) {
+  if (p && p->depth && p->normal && p->checked) p->raster = mgs_raster_create();
+  if (!p || !p->depth || !p->normal || !p->checked || !p->raster) {
     mgs_gpro_destroy(p);
     return mgs_error_set(err, MGS_ERR_NOMEM, "gaussianpro: out of memory");
   }
@@ -83,7 +85,10 @@ void mgs_gpro_destroy(mgs_gpro *p) {
   if (!p) return;
   if (p->depth)
     for (size_t i = 0; i < p->n; i++) free(p->depth[i]);
+  if (p->normal)
+    for (size_t i = 0; i < p->n; i++) free(p->normal[i]);
   free(p->depth);
+  free(p->normal);
   free(p->checked);
   mgs_raster_destroy(p->raster);
   free(p);
@@ -93,6 +98,10 @@ const float *mgs_gpro_cached_depth(const mgs_gpro *p, size_t view) { return view
 
 const float *mgs_gpro_checked_depth(const mgs_gpro *p, size_t view) {
   return view < p->n && p->checked[view] ? p->depth[view] : NULL;
+}
+
+const float *mgs_gpro_checked_normal(const mgs_gpro *p, size_t view) {
+  return view < p->n && p->checked[view] ? p->normal[view] : NULL;
 }
 
 /* ---- per-view inputs ------------------------------------------------------------------- */
@@ -301,14 +310,20 @@ mgs_status mgs_gpro_propagate(mgs_gpro *p, mgs_gaussians *g, mgs_adam *a, size_t
       r->accepted += (size_t)ok;
     }
     if (r->accepted > (size_t)p->o.min_pixels) st = add_gaussians(p, g, a, view, depth, normal, mask, &r->added, err);
-    for (size_t k = 0; k < np; k++)
+    for (size_t k = 0; k < np; k++) {
       if (cnt[k] < 2) depth[k] = 0; /* kept checked, as the authors' (their 300 = none) */
+      if (!(depth[k] > 0) || (al && al->data[k] < 0.5f)) /* the planar loss' mask (their -10) */
+        normal[3 * k] = normal[3 * k + 1] = normal[3 * k + 2] = 0;
+    }
   }
   if (st == MGS_OK) { /* keep this view's depth for the views that take it as a neighbour */
     free(p->depth[view]);
+    free(p->normal[view]);
     p->depth[view] = depth;
+    p->normal[view] = normal;
     p->checked[view] = 1;
     depth = NULL;
+    normal = NULL;
   }
   view_maps_free(&m);
   free(depth); free(normal); free(cnt); free(mask);
@@ -323,10 +338,12 @@ mgs_status mgs_gpro_save(const mgs_gpro *p, FILE *f, mgs_error *err) {
   uint32_t hdr[2] = {GPRO_STATE_TAG, (uint32_t)p->n};
   int ok = fwrite(hdr, sizeof hdr, 1, f) == 1;
   for (size_t i = 0; i < p->n && ok; i++) {
-    uint8_t has = p->depth[i] ? (uint8_t)(1 + p->checked[i]) : 0;
+    /* 1 neighbour depth, 2 checked depth, 3 checked depth and normals */
+    uint8_t has = p->depth[i] ? (uint8_t)(1 + p->checked[i] + (p->checked[i] && p->normal[i])) : 0;
     ok = fwrite(&has, 1, 1, f) == 1;
     size_t np = (size_t)p->views[i].cam.width * (size_t)p->views[i].cam.height;
     if (ok && has) ok = fwrite(p->depth[i], sizeof(float), np, f) == np;
+    if (ok && has == 3) ok = fwrite(p->normal[i], sizeof(float), 3 * np, f) == 3 * np;
   }
   return ok ? MGS_OK : mgs_error_set(err, MGS_ERR_IO, "gaussianpro: cannot write its state to the checkpoint");
 }
@@ -339,15 +356,21 @@ mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err) {
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state for %u views, the dataset has %zu", hdr[1], p->n);
   for (size_t i = 0; i < p->n; i++) {
     uint8_t has;
-    if (fread(&has, 1, 1, f) != 1 || has > 2) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
+    if (fread(&has, 1, 1, f) != 1 || has > 3) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
     free(p->depth[i]);
-    p->depth[i] = NULL;
-    p->checked[i] = has == 2;
+    free(p->normal[i]);
+    p->depth[i] = p->normal[i] = NULL;
+    p->checked[i] = has >= 2;
     if (!has) continue;
     size_t np = (size_t)p->views[i].cam.width * (size_t)p->views[i].cam.height;
     p->depth[i] = malloc(np * sizeof(float));
     if (!p->depth[i]) return mgs_error_set(err, MGS_ERR_NOMEM, "gaussianpro: out of memory");
     if (fread(p->depth[i], sizeof(float), np, f) != np)
+      return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
+    if (has < 3) continue; /* checkpoints before the normal half: depth only */
+    p->normal[i] = malloc(3 * np * sizeof(float));
+    if (!p->normal[i]) return mgs_error_set(err, MGS_ERR_NOMEM, "gaussianpro: out of memory");
+    if (fread(p->normal[i], sizeof(float), 3 * np, f) != 3 * np)
       return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: gaussianpro state truncated");
   }
   return MGS_OK;

@@ -8,8 +8,8 @@
  *                                       pixel where the render's depth disagrees
  *   mgs_strategy_gaussianpro_create ... the reference ADC plus that step every `every`
  *                                       iterations in (from, until), views in turn
- *   mgs_term_planar_create ............ the planar loss (its depth half) against the
- *                                       checked propagated depths
+ *   mgs_term_planar_create ............ the planar loss against the checked
+ *                                       propagated normals (the authors') and depths
  *
  * The propagated depth of every view matched so far is kept (as the authors cache it on
  * the camera) and reused as a neighbour's depth in the consistency check; it is part of
@@ -72,17 +72,29 @@ mgs_status mgs_gpro_propagate(mgs_gpro *p, mgs_gaussians *g, mgs_adam *a, size_t
  * than 2 neighbours agree): what the planar loss compares the render with. */
 const float *mgs_gpro_cached_depth(const mgs_gpro *p, size_t view);
 const float *mgs_gpro_checked_depth(const mgs_gpro *p, size_t view);
+/* The propagated normal of a view matched as the reference (world, unit, facing its
+ * camera, 3 per pixel; the zero vector where fewer than 2 neighbours agree or the image's
+ * alpha marks background: the authors' -10), NULL if none. */
+const float *mgs_gpro_checked_normal(const mgs_gpro *p, size_t view);
 
 mgs_status mgs_gpro_save(const mgs_gpro *p, FILE *f, mgs_error *err);
 mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err);
 
 /* The planar loss (train/term_planar.c), model gradients from iteration from + 1 on the
- * views with a checked propagated depth of `pro` (borrowed: the strategy's). */
-mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, int from, mgs_term **out, mgs_error *err);
-/* Its value for one view: weight x mean |sum w z - target| over target > 0, rendered with
- * r; its gradient added into grad (NULL: value only). The buffers are the caller's
- * scratch (grown as needed, *cap floats of depth). */
-mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const float *target, double weight,
+ * views with a checked propagation of `pro` (borrowed: the strategy's): weight_normal x
+ * mean (1 - cos(rendered normal, propagated normal)) + weight x mean |sum w z - depth|. */
+mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, int from, mgs_term **out,
+                                  mgs_error *err);
+typedef struct mgs_planar_target {
+  const float *depth;  /* propagated depth per pixel, 0 = none (NULL: none) */
+  const float *normal; /* propagated unit normal, world, 3 per pixel, zero = none (NULL: none) */
+  double w_depth, w_normal;
+} mgs_planar_target;
+/* Its value for one view rendered with r: w_depth x mean |sum w z - depth| over depth > 0
+ * plus w_normal x mean (1 - N.n/|N|) over the nonzero normals (N the rendered normal map;
+ * 1 where it is 0); the gradient added into grad (NULL: value only). The buffers are the
+ * caller's scratch (grown as needed, *cap floats of depth). */
+mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *t,
                            float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
                            mgs_error *err);
 

@@ -1,14 +1,19 @@
-/* GaussianPro's planar loss, its depth half (train/mgs_gaussianpro.h): weight x the mean
- * over the view's checked propagated depth of |rendered depth - propagated depth|, the
- * rendered depth being the rasterizer's sum w z (what its backward takes a gradient for).
- * Views without a checked propagated depth (not yet matched as the reference) add
- * nothing, as the authors' cameras without a propagated normal.
+/* GaussianPro's planar loss (train/mgs_gaussianpro.h) on the views matched as the
+ * reference, from the rasterizer's maps of one more render of the iteration's view:
  *
- * Deliberate difference: the authors' planar loss is on normals (0.001 L1 + 0.001 cosine
- * between the rendered normal and the propagated one); the 3DGS rasterizer here has no
- * backward for its normal map (render/raster_maps.c is forward only), so this term
- * constrains the depth that the propagated planes give instead. The term renders the view
- * once more (forward + backward) in each iteration where it is active. */
+ *   normal half  w_normal x mean over the accepted pixels of (1 - cos(N, n_p)), N the
+ *                rendered normal (sum_i w_i n_i, render/mgs_render_maps.h; the authors
+ *                normalize it, so the cosine), n_p the propagated normal; its gradient
+ *                enters through mgs_raster_map_grads (the 3DGS normal map's backward).
+ *                The authors' weight 0.001 (lambda_cos_normal of their demo script) and
+ *                mask (normal_gt != -10: >= 2 consistent neighbours, sky mask). Where
+ *                nothing is rendered (N = 0) their F.normalize gives 0: a cost of 1, no
+ *                gradient; the same here.
+ *   depth half   w_depth x mean |sum w z - propagated depth| over the checked propagated
+ *                depth (our addition, docs/notes/gaussianpro.md: before the normal map
+ *                had a backward it stood in for the normal half).
+ *
+ * Left out: the authors' L1 on the camera-frame normals (lambda_l1_normal 0.001). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +23,7 @@
 
 typedef struct planar {
   const mgs_gpro *pro;
-  double weight;
+  double weight, weight_normal;
   int from;
   mgs_raster *raster;
   float *dl_ddepth, *dl_dcolor;
@@ -27,16 +32,20 @@ typedef struct planar {
 
 static unsigned planar_active(void *self, int it) {
   planar *t = self;
-  return t->weight > 0 && it > t->from ? MGS_TERM_MODEL : 0u;
+  return (t->weight > 0 || t->weight_normal > 0) && it > t->from ? MGS_TERM_MODEL : 0u;
 }
 
-mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const float *target, double weight,
+mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *tg,
                            float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
                            mgs_error *err) {
   *value = 0;
-  size_t np = (size_t)cam->width * (size_t)cam->height, valid = 0;
-  for (size_t k = 0; k < np; k++) valid += target[k] > 0;
-  if (!valid) return MGS_OK;
+  size_t np = (size_t)cam->width * (size_t)cam->height, valid = 0, valid_n = 0;
+  const float *target = tg->w_depth > 0 ? tg->depth : NULL, *tn = tg->w_normal > 0 ? tg->normal : NULL;
+  if (target)
+    for (size_t k = 0; k < np; k++) valid += target[k] > 0;
+  if (tn)
+    for (size_t k = 0; k < np; k++) valid_n += tn[3 * k] != 0 || tn[3 * k + 1] != 0 || tn[3 * k + 2] != 0;
+  if (!valid && !valid_n) return MGS_OK;
   if (np > *cap) {
     float *a = realloc(*dl_ddepth, np * sizeof(float));
     if (a) *dl_ddepth = a;
@@ -51,24 +60,46 @@ mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_came
   mgs_raster_output ro;
   mgs_status st = mgs_raster_forward(r, g, cam, &rs, &ro, err);
   if (st) return st;
-  double sum = 0, w = weight / (double)valid;
+  double sum = 0, w = valid ? tg->w_depth / (double)valid : 0.0;
   for (size_t k = 0; k < np; k++) {
-    float d = target[k] > 0 ? ro.depth[k] - target[k] : 0.0f;
+    float d = valid && target[k] > 0 ? ro.depth[k] - target[k] : 0.0f;
     sum += fabs((double)d);
     (*dl_ddepth)[k] = d > 0 ? (float)w : d < 0 ? (float)-w : 0.0f;
   }
   memset(*dl_dcolor, 0, 3 * np * sizeof(float));
   *value = w * sum;
-  return grad ? mgs_raster_backward(r, *dl_dcolor, NULL, *dl_ddepth, grad, NULL, err) : MGS_OK;
+  if (valid_n) {
+    mgs_render_maps mp;
+    mgs_raster_map_grad mg;
+    st = mgs_raster_maps(r, MGS_MAP_NORMAL, &mp, err);
+    if (st == MGS_OK && grad) st = mgs_raster_map_grads(r, &mg, err);
+    if (st) return st;
+    const double wn = tg->w_normal / (double)valid_n;
+    double cost = 0;
+    for (size_t k = 0; k < np; k++) {
+      const float *t = tn + 3 * k, *N = mp.normal + 3 * k;
+      if (t[0] == 0 && t[1] == 0 && t[2] == 0) continue;
+      double len = sqrt((double)N[0] * N[0] + (double)N[1] * N[1] + (double)N[2] * N[2]);
+      if (!(len > 1e-12)) { cost += 1; continue; }
+      double c = (N[0] * (double)t[0] + N[1] * (double)t[1] + N[2] * (double)t[2]) / len;
+      cost += 1 - c;
+      /* d(-N.t/|N|)/dN = -(t - c N/|N|)/|N| */
+      if (grad)
+        for (int j = 0; j < 3; j++) mg.normal[3 * k + j] += (float)(-wn * (t[j] - c * N[j] / len) / len);
+    }
+    *value += wn * cost;
+  }
+  return grad ? mgs_raster_backward(r, *dl_dcolor, NULL, valid ? *dl_ddepth : NULL, grad, NULL, err) : MGS_OK;
 }
 
 static mgs_status planar_model_grad(void *self, mgs_term_step *s, mgs_error *err) {
   planar *t = self;
   s->value = 0;
-  const float *target = mgs_gpro_checked_depth(t->pro, s->view_index);
-  if (!target) return MGS_OK;
-  return mgs_planar_loss(t->raster, s->model, &s->view->cam, target, t->weight, &t->dl_ddepth, &t->dl_dcolor, &t->cap,
-                         s->grad, &s->value, err);
+  mgs_planar_target tg = {mgs_gpro_checked_depth(t->pro, s->view_index), mgs_gpro_checked_normal(t->pro, s->view_index),
+                          t->weight, t->weight_normal};
+  if (!tg.depth && !tg.normal) return MGS_OK;
+  return mgs_planar_loss(t->raster, s->model, &s->view->cam, &tg, &t->dl_ddepth, &t->dl_dcolor, &t->cap, s->grad,
+                         &s->value, err);
 }
 
 static void planar_destroy(void *self) {
@@ -82,8 +113,11 @@ static void planar_destroy(void *self) {
 
 static const mgs_term_ops planar_ops = {"planar", planar_active, NULL, planar_model_grad, NULL, NULL, planar_destroy};
 
-mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, int from, mgs_term **out, mgs_error *err) {
+mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, int from, mgs_term **out,
+                                  mgs_error *err) {
   *out = NULL;
+  if (!(weight >= 0) || !(weight_normal >= 0))
+    return mgs_error_set(err, MGS_ERR_ARG, "planar loss: negative weight (depth %g, normal %g)", weight, weight_normal);
   planar *t = calloc(1, sizeof *t);
   if (t) t->raster = mgs_raster_create();
   if (!t || !t->raster) {
@@ -92,6 +126,7 @@ mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, int from, 
   }
   t->pro = pro;
   t->weight = weight;
+  t->weight_normal = weight_normal;
   t->from = from;
   *out = mgs_term_create(&planar_ops, t);
   return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");

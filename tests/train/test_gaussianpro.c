@@ -1,12 +1,16 @@
 /* GaussianPro's propagation step (train/mgs_gaussianpro.h) on a shell of flat Gaussians
  * (the unit sphere, random colours as texture), its training images rendered from the
  * whole shell: after a cap facing view 0 is cut out, one step on view 0 adds Gaussians in
- * the cap and nowhere else, on the sphere; on the intact shell it adds none. Also: the
- * strategy's state survives a save/load; the planar loss' gradient matches differences. */
+ * the cap and nowhere else, on the sphere; on the intact shell it adds none; the kept
+ * propagated normals are unit, camera-facing and radial on the shell. Also: the
+ * strategy's state (depths and normals) survives a save/load; the planar loss' gradient
+ * (depth half, normal half, both) matches differences; the normal half alone turns a
+ * tilted flat Gaussian onto a known propagated normal. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "tests/mgs_test.h"
+#include "core/mgs_math.h"
 #include "core/mgs_rng.h"
 #include "render/mgs_raster.h"
 #include "train/mgs_gaussianpro.h"
@@ -157,6 +161,39 @@ static void test_fills_cut_cap(void) {
   CHECK_MSG(outside == 0, "%zu new Gaussians outside the cap", outside);
   CHECK_MSG(off_surface == 0, "%zu new Gaussians off the sphere beyond the tangent planes of the rim", off_surface);
   CHECK(mgs_gpro_cached_depth(p, 0) != NULL);
+  /* the propagated normals kept for the planar loss: unit and facing the camera where the
+     checked depth is, zero elsewhere; on the intact shell's part within 60 degrees of the
+     view's axis, near the sphere's radial direction */
+  {
+    const float *dn = mgs_gpro_checked_depth(p, 0), *nn = mgs_gpro_checked_normal(p, 0);
+    CHECK(dn && nn);
+    size_t n_set = 0, bad = 0, radial = 0, n_rad = 0;
+    double eye[3];
+    mgs_camera_center(&v[0].cam, eye);
+    for (int y = 0; y < SIZE && dn && nn; y++)
+      for (int x = 0; x < SIZE; x++) {
+        size_t k = (size_t)y * SIZE + x;
+        const float *nv = nn + 3 * k;
+        double l = sqrt((double)nv[0] * nv[0] + (double)nv[1] * nv[1] + (double)nv[2] * nv[2]);
+        if (!(dn[k] > 0)) { bad += l != 0; continue; }
+        if (l == 0) continue; /* background by the image's alpha */
+        n_set++;
+        double ro[3], rd[3];
+        mgs_camera_ray(&v[0].cam, x + 0.5, y + 0.5, ro, rd);
+        double zc = v[0].cam.c2w[2] * rd[0] + v[0].cam.c2w[6] * rd[1] + v[0].cam.c2w[10] * rd[2];
+        double P[3] = {ro[0] + rd[0] * dn[k] / zc, ro[1] + rd[1] * dn[k] / zc, ro[2] + rd[2] * dn[k] / zc};
+        bad += fabs(l - 1) > 1e-3 || nv[0] * (eye[0] - P[0]) + nv[1] * (eye[1] - P[1]) + nv[2] * (eye[2] - P[2]) < 0;
+        double pl = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+        if ((P[0] * d0[0] + P[1] * d0[1] + P[2] * d0[2]) / pl > cos(M_PI / 3) && pl < 1.02) {
+          n_rad++;
+          radial += (nv[0] * P[0] + nv[1] * P[1] + nv[2] * P[2]) / pl > cos(20 * M_PI / 180);
+        }
+      }
+    fprintf(stderr, "  propagated normals: %zu set, %zu bad, %zu of %zu on the shell within 20 deg of radial\n", n_set, bad,
+            radial, n_rad);
+    CHECK(n_set > 1000 && bad == 0);
+    CHECK_MSG(radial >= 0.8 * n_rad && n_rad > 500, "%zu of %zu normals near radial", radial, n_rad);
+  }
 
   /* the kept depths round-trip through the checkpoint state */
   FILE *f = tmpfile();
@@ -170,6 +207,8 @@ static void test_fills_cut_cap(void) {
     const float *a = mgs_gpro_cached_depth(p, (size_t)i), *b = mgs_gpro_cached_depth(q, (size_t)i);
     n_cached += a != NULL;
     if ((a == NULL) != (b == NULL) || (a && memcmp(a, b, sizeof(float) * SIZE * SIZE))) same = 0;
+    const float *na = mgs_gpro_checked_normal(p, (size_t)i), *nb = mgs_gpro_checked_normal(q, (size_t)i);
+    if ((na == NULL) != (nb == NULL) || (na && memcmp(na, nb, sizeof(float) * 3 * SIZE * SIZE))) same = 0;
   }
   CHECK(same && n_cached == 5);
   /* a damaged state is an error */
@@ -188,7 +227,7 @@ static void test_fills_cut_cap(void) {
 
 /* The planar loss' gradient against central differences of its value, for Gaussians of
  * ordinary, tiny and near-opaque kinds, and far from the origin. */
-static void planar_fd(double offset, float log_scale, float opacity_logit) {
+static void planar_fd(double offset, float log_scale, float opacity_logit, double w_depth, double w_normal) {
   const int S = 32;
   mgs_camera cam;
   mgs_camera_init_fovx(&cam, S, S, 0.9);
@@ -210,6 +249,13 @@ static void planar_fd(double offset, float log_scale, float opacity_logit) {
   }
   float *tgt = malloc(sizeof(float) * S * S);
   for (int k = 0; k < S * S; k++) tgt[k] = (k % 3) ? 5.0f + 0.01f * (float)(k % 7) : 0.0f; /* beyond the render: one sign */
+  /* propagated normals: tilted up to ~40 degrees from the camera axis, none on every 5th px */
+  float *tn = malloc(sizeof(float) * 3 * S * S);
+  for (int k = 0; k < S * S; k++) {
+    float a = 0.7f * (float)sin(0.37 * k), b = 0.7f * (float)cos(0.23 * k), l = sqrtf(1 + a * a + b * b);
+    tn[3 * k] = (k % 5) ? a / l : 0; tn[3 * k + 1] = (k % 5) ? b / l : 0; tn[3 * k + 2] = (k % 5) ? -1 / l : 0;
+  }
+  mgs_planar_target pt = {tgt, tn, w_depth, w_normal};
   mgs_raster *r = mgs_raster_create();
   float *dd = NULL, *dc = NULL;
   size_t cap = 0;
@@ -218,7 +264,7 @@ static void planar_fd(double offset, float log_scale, float opacity_logit) {
   for (int gr = 0; gr < MGS_PARAM_COUNT; gr++)
     memset(mgs_gaussians_group(grad, (mgs_param_group)gr), 0, sizeof(float) * 8 * (size_t)mgs_param_dim((mgs_param_group)gr));
   double v0;
-  CHECK_OK(mgs_planar_loss(r, g, &cam, tgt, 0.5, &dd, &dc, &cap, grad, &v0, &err), &err);
+  CHECK_OK(mgs_planar_loss(r, g, &cam, &pt, &dd, &dc, &cap, grad, &v0, &err), &err);
   CHECK(v0 > 0);
   static const mgs_param_group groups[4] = {MGS_PARAM_MEAN, MGS_PARAM_LOG_SCALE, MGS_PARAM_ROT, MGS_PARAM_OPACITY};
   double worst = 0, gmax = 0;
@@ -238,10 +284,10 @@ static void planar_fd(double offset, float log_scale, float opacity_logit) {
           double vp, vm;
           par[dim * i + k] = keep + h;
           float hp = par[dim * i + k] - keep; /* the step float really took */
-          mgs_planar_loss(r, g, &cam, tgt, 0.5, &dd, &dc, &cap, NULL, &vp, &err);
+          mgs_planar_loss(r, g, &cam, &pt, &dd, &dc, &cap, NULL, &vp, &err);
           par[dim * i + k] = keep - h;
           float hm = keep - par[dim * i + k];
-          mgs_planar_loss(r, g, &cam, tgt, 0.5, &dd, &dc, &cap, NULL, &vm, &err);
+          mgs_planar_loss(r, g, &cam, &pt, &dd, &dc, &cap, NULL, &vm, &err);
           par[dim * i + k] = keep;
           if (!(hp + hm > 0)) continue;
           double fd = (vp - vm) / (double)(hp + hm);
@@ -254,28 +300,95 @@ static void planar_fd(double offset, float log_scale, float opacity_logit) {
         n_ok += ok;
       }
   }
-  fprintf(stderr, "  offset %g, log scale %.1f, opacity logit %.1f: loss %.4g, largest gradient %.3g, worst |fd - analytic| "
-          "%.3g, %d of %d agree\n", offset, (double)log_scale, (double)opacity_logit, v0, gmax, worst, n_ok, n_all);
+  fprintf(stderr, "  depth %g normal %g, offset %g, log scale %.1f, opacity logit %.1f: loss %.4g, largest gradient %.3g, worst |fd - analytic| "
+          "%.3g, %d of %d agree\n", w_depth, w_normal, offset, (double)log_scale, (double)opacity_logit, v0, gmax, worst, n_ok, n_all);
   CHECK(gmax > 1e-3);
   /* the forward's 1/255 alpha cut makes the loss step (~1e-5) where a Gaussian's tail
      crosses it inside a difference's interval: a few entries may miss, a wrong formula
      misses most */
   CHECK_MSG(n_ok >= 0.9 * n_all, "%d of %d derivatives agree", n_ok, n_all);
-  free(tgt); free(dd); free(dc);
+  free(tgt); free(tn); free(dd); free(dc);
   mgs_raster_destroy(r);
   mgs_gaussians_destroy(g);
   mgs_gaussians_destroy(grad);
 }
 
 static void test_planar_grad(void) {
-  planar_fd(0, -2.0f, 0.0f);     /* ordinary */
-  planar_fd(0, -4.0f, 0.0f);     /* small (a few px) */
-  planar_fd(0, -2.0f, 3.0f);     /* alpha 0.95 */
-  planar_fd(1e5, -2.0f, 0.0f);   /* far from the origin */
+  for (int h = 0; h < 3; h++) { /* depth half, normal half, both */
+    double wd = h == 1 ? 0 : 0.5, wn = h == 0 ? 0 : 0.5;
+    planar_fd(0, -2.0f, 0.0f, wd, wn);     /* ordinary */
+    planar_fd(0, -4.0f, 0.0f, wd, wn);     /* small (a few px) */
+    planar_fd(0, -2.0f, 3.0f, wd, wn);     /* alpha 0.95 */
+    planar_fd(1e5, -2.0f, 0.0f, wd, wn);   /* far from the origin */
+  }
+}
+
+/* The normal half at work: a flat Gaussian tilted 35 degrees about x from the camera
+ * axis, plain gradient descent on its rotation alone by the term's gradient (normal half
+ * only, weight 1) towards a known propagated normal on every pixel: the camera axis, and
+ * 20 degrees to the other side (55 degrees away). It ends within 1 degree of each. */
+static double tilt_of(const mgs_gaussians *g, const double t[3]) {
+  /* the angle between the Gaussian's smallest axis (local z here) and t, either sign */
+  float R[9];
+  mgs_quat_to_mat3f(g->rot, R);
+  return acos(fmin(1.0, fabs(R[2] * t[0] + R[5] * t[1] + R[8] * t[2]))) * 180 / M_PI;
+}
+
+static double rotate_flat(double target_deg, int steps, double *first_drop) {
+  const int S = 32;
+  mgs_camera cam;
+  mgs_camera_init_fovx(&cam, S, S, 0.9);
+  double eye[3] = {0, 0, -3}, target[3] = {0, 0, 0}, up[3] = {0, -1, 0};
+  mgs_camera_look_at(&cam, eye, target, up);
+  mgs_gaussians *g = mgs_gaussians_create(1, 0), *grad = mgs_gaussians_create(1, 0);
+  size_t first;
+  mgs_error err = {0};
+  CHECK_OK(mgs_gaussians_append(g, 1, &first, &err), &err);
+  CHECK_OK(mgs_gaussians_append(grad, 1, &first, &err), &err);
+  memset(g->mean, 0, 3 * sizeof(float));
+  g->log_scale[0] = g->log_scale[1] = (float)log(0.5); g->log_scale[2] = (float)log(0.01);
+  const double a = 35 * M_PI / 180; /* about the x axis: local z (the smallest) at 35 deg from z */
+  g->rot[0] = (float)cos(a / 2); g->rot[1] = (float)sin(a / 2); g->rot[2] = g->rot[3] = 0;
+  g->opacity[0] = 2.0f;
+  const double b = target_deg * M_PI / 180, t[3] = {0, sin(b), -cos(b)}; /* facing the camera */
+  float *tn = malloc(sizeof(float) * 3 * S * S);
+  for (int k = 0; k < S * S; k++) for (int j = 0; j < 3; j++) tn[3 * k + j] = (float)t[j];
+  mgs_planar_target pt = {NULL, tn, 0, 1.0};
+  mgs_raster *r = mgs_raster_create();
+  float *dd = NULL, *dc = NULL;
+  size_t cap = 0;
+  double t0 = tilt_of(g, t);
+  for (int it = 0; it < steps; it++) {
+    for (int gr = 0; gr < MGS_PARAM_COUNT; gr++)
+      memset(mgs_gaussians_group(grad, (mgs_param_group)gr), 0, sizeof(float) * (size_t)mgs_param_dim((mgs_param_group)gr));
+    double v;
+    CHECK_OK(mgs_planar_loss(r, g, &cam, &pt, &dd, &dc, &cap, grad, &v, &err), &err);
+    for (int k = 0; k < 4; k++) g->rot[k] -= 0.05f * grad->rot[k];
+    if (it == 0) *first_drop = t0 - tilt_of(g, t);
+  }
+  double t1 = tilt_of(g, t);
+  fprintf(stderr, "  target %+.0f deg: off by %.2f -> %.2f deg in %d steps (first step %.3f deg)\n", target_deg, t0, t1, steps,
+          *first_drop);
+  free(tn); free(dd); free(dc);
+  mgs_raster_destroy(r);
+  mgs_gaussians_destroy(g);
+  mgs_gaussians_destroy(grad);
+  return t1;
+}
+
+static void test_planar_normal_rotates(void) {
+  double drop;
+  double t = rotate_flat(0, 100, &drop);
+  CHECK(drop > 0);
+  CHECK_MSG(t < 1.0, "the normal half left the Gaussian %.2f deg off the camera axis", t);
+  t = rotate_flat(-20, 100, &drop);
+  CHECK(drop > 0);
+  CHECK_MSG(t < 1.0, "the normal half left the Gaussian %.2f deg off a target 20 deg to the other side", t);
 }
 
 int main(void) {
   RUN(test_planar_grad);
+  RUN(test_planar_normal_rotates);
   RUN(test_fills_cut_cap);
   return mgs_test_finish();
 }

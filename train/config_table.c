@@ -256,6 +256,8 @@ static const mgs_option TABLE[] = {
    "GaussianPro: weight of the planar loss on depth after FROM (0 = off; docs/notes/gaussianpro.md)", NOT_DIST},
   {"gpro-planar-normal", "gpro_planar_normal", MGS_OPT_DOUBLE, F(gpro_planar_normal), "0.001", 0, 1e6, NULL, NULL,
    MGS_GROUP_BASELINE, REC, "GaussianPro: weight of the planar loss 1 - cos(rendered, propagated normal) (0 = off)", NOT_DIST},
+  {"gpro-planar-l1", "gpro_planar_l1", MGS_OPT_DOUBLE, F(gpro_planar_l1), "0.001", 0, 1e6, NULL, NULL,
+   MGS_GROUP_BASELINE, REC, "GaussianPro: weight of the planar loss' L1 of the camera-frame normals (0 = off)", NOT_DIST},
 };
 
 const mgs_option *mgs_config_options(size_t *count) {

@@ -106,6 +106,7 @@ typedef struct mgs_train_config {
   int gpro_schedule[3], gpro_patch, gpro_pm_iters, gpro_neighbors;
   double gpro_error_max, gpro_error_min, gpro_planar;
   double gpro_planar_normal;
+  double gpro_planar_l1;
   /* where each option's value came from (mgs_cfg_source, by option index) */
   unsigned char source[128];
 } mgs_train_config;

@@ -82,17 +82,20 @@ mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err);
 
 /* The planar loss (train/term_planar.c), model gradients from iteration from + 1 on the
  * views with a checked propagation of `pro` (borrowed: the strategy's): weight_normal x
- * mean (1 - cos(rendered normal, propagated normal)) + weight x mean |sum w z - depth|. */
-mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, int from, mgs_term **out,
-                                  mgs_error *err);
+ * mean (1 - cos(rendered normal, propagated normal)) + weight_l1 x mean |N/|N| - n|_1 in
+ * the camera frame + weight x mean |sum w z - depth|. */
+mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, double weight_l1, int from,
+                                  mgs_term **out, mgs_error *err);
 typedef struct mgs_planar_target {
   const float *depth;  /* propagated depth per pixel, 0 = none (NULL: none) */
   const float *normal; /* propagated unit normal, world, 3 per pixel, zero = none (NULL: none) */
   double w_depth, w_normal;
+  double w_l1;         /* the authors' L1 of the normals (camera frame); 0 = off */
 } mgs_planar_target;
 /* Its value for one view rendered with r: w_depth x mean |sum w z - depth| over depth > 0
  * plus w_normal x mean (1 - N.n/|N|) over the nonzero normals (N the rendered normal map;
- * 1 where it is 0); the gradient added into grad (NULL: value only). The buffers are the
+ * 1 where it is 0) plus w_l1 x mean sum_j |R N/|N| - R n|_j over them (R world -> camera;
+ * N/|N| = 0 where N = 0, as F.normalize); the gradient added into grad (NULL: value only). The buffers are the
  * caller's scratch (grown as needed, *cap floats of depth). */
 mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *t,
                            float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,

@@ -137,9 +137,9 @@ mgs_status mgs_train_setup_create(const mgs_train_config *c, mgs_dataset *ds, co
   st = mgs_trainer_create(ds, o, g0, strat, &out->trainer, err); /* owns g0 and strat from here */
   g0 = NULL;
   if (st) goto fail;
-  if (c->strategy == MGS_STRAT_GAUSSIANPRO && (c->gpro_planar > 0 || c->gpro_planar_normal > 0)) {
+  if (c->strategy == MGS_STRAT_GAUSSIANPRO && (c->gpro_planar > 0 || c->gpro_planar_normal > 0 || c->gpro_planar_l1 > 0)) {
     mgs_term *pt = NULL;
-    if ((st = mgs_term_planar_create(mgs_strategy_gaussianpro_pro(strat), c->gpro_planar, c->gpro_planar_normal, go.from,
+    if ((st = mgs_term_planar_create(mgs_strategy_gaussianpro_pro(strat), c->gpro_planar, c->gpro_planar_normal, c->gpro_planar_l1, go.from,
                                      &pt, err)) ||
         (st = mgs_trainer_add_term(out->trainer, pt, err)))
       goto fail;

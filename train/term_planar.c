@@ -13,7 +13,9 @@
  *                depth (our addition, docs/notes/gaussianpro.md: before the normal map
  *                had a backward it stood in for the normal half).
  *
- * Left out: the authors' L1 on the camera-frame normals (lambda_l1_normal 0.001). */
+ *   L1 half      w_l1 x mean over the same pixels of sum_j |R N/|N| - R n_p|_j, R the
+ *                camera's world-to-camera rotation: the authors' lambda_l1_normal (0.001
+ *                in their demo script) on camera-frame normals, summed over the channels. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,7 +25,7 @@
 
 typedef struct planar {
   const mgs_gpro *pro;
-  double weight, weight_normal;
+  double weight, weight_normal, weight_l1;
   int from;
   mgs_raster *raster;
   float *dl_ddepth, *dl_dcolor;
@@ -32,7 +34,7 @@ typedef struct planar {
 
 static unsigned planar_active(void *self, int it) {
   planar *t = self;
-  return (t->weight > 0 || t->weight_normal > 0) && it > t->from ? MGS_TERM_MODEL : 0u;
+  return (t->weight > 0 || t->weight_normal > 0 || t->weight_l1 > 0) && it > t->from ? MGS_TERM_MODEL : 0u;
 }
 
 mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *tg,
@@ -40,7 +42,7 @@ mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_came
                            mgs_error *err) {
   *value = 0;
   size_t np = (size_t)cam->width * (size_t)cam->height, valid = 0, valid_n = 0;
-  const float *target = tg->w_depth > 0 ? tg->depth : NULL, *tn = tg->w_normal > 0 ? tg->normal : NULL;
+  const float *target = tg->w_depth > 0 ? tg->depth : NULL, *tn = tg->w_normal > 0 || tg->w_l1 > 0 ? tg->normal : NULL;
   if (target)
     for (size_t k = 0; k < np; k++) valid += target[k] > 0;
   if (tn)
@@ -74,20 +76,37 @@ mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_came
     st = mgs_raster_maps(r, MGS_MAP_NORMAL, &mp, err);
     if (st == MGS_OK && grad) st = mgs_raster_map_grads(r, &mg, err);
     if (st) return st;
-    const double wn = tg->w_normal / (double)valid_n;
-    double cost = 0;
+    const double wn = tg->w_normal / (double)valid_n, wl = tg->w_l1 / (double)valid_n;
+    const double *R = cam->w2c; /* rows 0..2, columns 0..2: world -> camera rotation */
+    double cost = 0, cost_l1 = 0;
     for (size_t k = 0; k < np; k++) {
       const float *t = tn + 3 * k, *N = mp.normal + 3 * k;
       if (t[0] == 0 && t[1] == 0 && t[2] == 0) continue;
+      double tc[3];
+      for (int a = 0; a < 3; a++) tc[a] = R[4 * a] * t[0] + R[4 * a + 1] * t[1] + R[4 * a + 2] * t[2];
       double len = sqrt((double)N[0] * N[0] + (double)N[1] * N[1] + (double)N[2] * N[2]);
-      if (!(len > 1e-12)) { cost += 1; continue; }
+      if (!(len > 1e-12)) { /* F.normalize(0) = 0: the cosine 0, the L1 |n|_1; no gradient */
+        cost += 1;
+        cost_l1 += fabs(tc[0]) + fabs(tc[1]) + fabs(tc[2]);
+        continue;
+      }
       double c = (N[0] * (double)t[0] + N[1] * (double)t[1] + N[2] * (double)t[2]) / len;
       cost += 1 - c;
+      /* L1: s = sign(R u - R t), u = N/|N|; dL/du = R^T s, dL/dN = (g - u (u.g)) / |N| */
+      double u[3] = {N[0] / len, N[1] / len, N[2] / len}, gu[3] = {0, 0, 0};
+      for (int a = 0; a < 3; a++) {
+        double d = R[4 * a] * u[0] + R[4 * a + 1] * u[1] + R[4 * a + 2] * u[2] - tc[a];
+        cost_l1 += fabs(d);
+        double s = d > 0 ? 1.0 : d < 0 ? -1.0 : 0.0;
+        for (int j = 0; j < 3; j++) gu[j] += R[4 * a + j] * s;
+      }
+      const double ug = u[0] * gu[0] + u[1] * gu[1] + u[2] * gu[2];
       /* d(-N.t/|N|)/dN = -(t - c N/|N|)/|N| */
       if (grad)
-        for (int j = 0; j < 3; j++) mg.normal[3 * k + j] += (float)(-wn * (t[j] - c * N[j] / len) / len);
+        for (int j = 0; j < 3; j++)
+          mg.normal[3 * k + j] += (float)(-wn * (t[j] - c * u[j]) / len + wl * (gu[j] - u[j] * ug) / len);
     }
-    *value += wn * cost;
+    *value += wn * cost + wl * cost_l1;
   }
   return grad ? mgs_raster_backward(r, *dl_dcolor, NULL, valid ? *dl_ddepth : NULL, grad, NULL, err) : MGS_OK;
 }
@@ -96,7 +115,7 @@ static mgs_status planar_model_grad(void *self, mgs_term_step *s, mgs_error *err
   planar *t = self;
   s->value = 0;
   mgs_planar_target tg = {mgs_gpro_checked_depth(t->pro, s->view_index), mgs_gpro_checked_normal(t->pro, s->view_index),
-                          t->weight, t->weight_normal};
+                          t->weight, t->weight_normal, t->weight_l1};
   if (!tg.depth && !tg.normal) return MGS_OK;
   return mgs_planar_loss(t->raster, s->model, &s->view->cam, &tg, &t->dl_ddepth, &t->dl_dcolor, &t->cap, s->grad,
                          &s->value, err);
@@ -113,11 +132,12 @@ static void planar_destroy(void *self) {
 
 static const mgs_term_ops planar_ops = {"planar", planar_active, NULL, planar_model_grad, NULL, NULL, planar_destroy};
 
-mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, int from, mgs_term **out,
-                                  mgs_error *err) {
+mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, double weight_l1, int from,
+                                  mgs_term **out, mgs_error *err) {
   *out = NULL;
-  if (!(weight >= 0) || !(weight_normal >= 0))
-    return mgs_error_set(err, MGS_ERR_ARG, "planar loss: negative weight (depth %g, normal %g)", weight, weight_normal);
+  if (!(weight >= 0) || !(weight_normal >= 0) || !(weight_l1 >= 0))
+    return mgs_error_set(err, MGS_ERR_ARG, "planar loss: negative weight (depth %g, normal %g, L1 %g)", weight, weight_normal,
+                         weight_l1);
   planar *t = calloc(1, sizeof *t);
   if (t) t->raster = mgs_raster_create();
   if (!t || !t->raster) {
@@ -127,6 +147,7 @@ mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double wei
   t->pro = pro;
   t->weight = weight;
   t->weight_normal = weight_normal;
+  t->weight_l1 = weight_l1;
   t->from = from;
   *out = mgs_term_create(&planar_ops, t);
   return *out ? MGS_OK : mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");

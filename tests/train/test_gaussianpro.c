@@ -227,11 +227,12 @@ static void test_fills_cut_cap(void) {
 
 /* The planar loss' gradient against central differences of its value, for Gaussians of
  * ordinary, tiny and near-opaque kinds, and far from the origin. */
-static void planar_fd(double offset, float log_scale, float opacity_logit, double w_depth, double w_normal) {
+static double g_roll = 0; /* the camera rolled about its axis: the L1 half depends on the frame */
+static void planar_fd(double offset, float log_scale, float opacity_logit, double w_depth, double w_normal, double w_l1) {
   const int S = 32;
   mgs_camera cam;
   mgs_camera_init_fovx(&cam, S, S, 0.9);
-  double eye[3] = {offset, 0, -3}, target[3] = {offset, 0, 0}, up[3] = {0, -1, 0};
+  double eye[3] = {offset, 0, -3}, target[3] = {offset, 0, 0}, up[3] = {sin(g_roll), -cos(g_roll), 0};
   mgs_camera_look_at(&cam, eye, target, up);
   mgs_gaussians *g = mgs_gaussians_create(8, 0);
   size_t first;
@@ -255,7 +256,7 @@ static void planar_fd(double offset, float log_scale, float opacity_logit, doubl
     float a = 0.7f * (float)sin(0.37 * k), b = 0.7f * (float)cos(0.23 * k), l = sqrtf(1 + a * a + b * b);
     tn[3 * k] = (k % 5) ? a / l : 0; tn[3 * k + 1] = (k % 5) ? b / l : 0; tn[3 * k + 2] = (k % 5) ? -1 / l : 0;
   }
-  mgs_planar_target pt = {tgt, tn, w_depth, w_normal};
+  mgs_planar_target pt = {tgt, tn, w_depth, w_normal, w_l1};
   mgs_raster *r = mgs_raster_create();
   float *dd = NULL, *dc = NULL;
   size_t cap = 0;
@@ -300,8 +301,8 @@ static void planar_fd(double offset, float log_scale, float opacity_logit, doubl
         n_ok += ok;
       }
   }
-  fprintf(stderr, "  depth %g normal %g, offset %g, log scale %.1f, opacity logit %.1f: loss %.4g, largest gradient %.3g, worst |fd - analytic| "
-          "%.3g, %d of %d agree\n", w_depth, w_normal, offset, (double)log_scale, (double)opacity_logit, v0, gmax, worst, n_ok, n_all);
+  fprintf(stderr, "  depth %g normal %g L1 %g, offset %g, log scale %.1f, opacity logit %.1f: loss %.4g, largest gradient %.3g, worst |fd - analytic| "
+          "%.3g, %d of %d agree\n", w_depth, w_normal, w_l1, offset, (double)log_scale, (double)opacity_logit, v0, gmax, worst, n_ok, n_all);
   CHECK(gmax > 1e-3);
   /* the forward's 1/255 alpha cut makes the loss step (~1e-5) where a Gaussian's tail
      crosses it inside a difference's interval: a few entries may miss, a wrong formula
@@ -314,12 +315,13 @@ static void planar_fd(double offset, float log_scale, float opacity_logit, doubl
 }
 
 static void test_planar_grad(void) {
-  for (int h = 0; h < 3; h++) { /* depth half, normal half, both */
-    double wd = h == 1 ? 0 : 0.5, wn = h == 0 ? 0 : 0.5;
-    planar_fd(0, -2.0f, 0.0f, wd, wn);     /* ordinary */
-    planar_fd(0, -4.0f, 0.0f, wd, wn);     /* small (a few px) */
-    planar_fd(0, -2.0f, 3.0f, wd, wn);     /* alpha 0.95 */
-    planar_fd(1e5, -2.0f, 0.0f, wd, wn);   /* far from the origin */
+  for (int h = 0; h < 4; h++) { /* depth half, cosine half, both, the L1 of the normals alone */
+    double wd = h == 1 || h == 3 ? 0 : 0.5, wn = h == 0 || h == 3 ? 0 : 0.5, wl = h == 3 ? 0.5 : 0;
+    g_roll = h == 3 ? 0.7 : 0; /* world and camera frames differ for the L1 half */
+    planar_fd(0, -2.0f, 0.0f, wd, wn, wl);     /* ordinary */
+    planar_fd(0, -4.0f, 0.0f, wd, wn, wl);     /* small (a few px) */
+    planar_fd(0, -2.0f, 3.0f, wd, wn, wl);     /* alpha 0.95 */
+    planar_fd(1e5, -2.0f, 0.0f, wd, wn, wl);   /* far from the origin */
   }
 }
 
@@ -353,7 +355,7 @@ static double rotate_flat(double target_deg, int steps, double *first_drop) {
   const double b = target_deg * M_PI / 180, t[3] = {0, sin(b), -cos(b)}; /* facing the camera */
   float *tn = malloc(sizeof(float) * 3 * S * S);
   for (int k = 0; k < S * S; k++) for (int j = 0; j < 3; j++) tn[3 * k + j] = (float)t[j];
-  mgs_planar_target pt = {NULL, tn, 0, 1.0};
+  mgs_planar_target pt = {NULL, tn, 0, 1.0, 0};
   mgs_raster *r = mgs_raster_create();
   float *dd = NULL, *dc = NULL;
   size_t cap = 0;

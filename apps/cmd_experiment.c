@@ -312,6 +312,16 @@ static mgs_status write_report(experiment *e, mgs_error *err) {
   return st;
 }
 
+/* One evaluation-phase command into log: 0 done, 3 interrupted, 1 failed (reason filled). */
+static int run_step(const char **argv, const char *log, const char *what, char *reason, size_t reason_n) {
+  int rc = run_child((char *const *)argv, log);
+  if (g_stop || rc == 130) return 3;
+  if (rc == 0) return 0;
+  log_reason(log, reason, reason_n);
+  if (!reason[0]) snprintf(reason, reason_n, "%s exited with code %d (see %s)", what, rc, log);
+  return 1;
+}
+
 /* Trains and evaluates one run; returns 0 done, 1 failed (recorded), 2 variant not
  * available, 3 interrupted. */
 static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason, size_t reason_n) {
@@ -430,14 +440,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     if (it->sweep && iter != e->iters) continue;
     if (sugar && iter == e->iters) {
       const char *mv[] = {"morsegs", "vdb", it->dir, "--sugar-mesh", NULL};
-      rc = run_child((char *const *)mv, elog);
-      if (g_stop || rc == 130) { result = 3; goto done; }
-      if (rc != 0) {
-        log_reason(elog, reason, reason_n);
-        if (!reason[0]) snprintf(reason, reason_n, "morsegs vdb --sugar-mesh exited with code %d (see %s)", rc, elog);
-        result = 1;
-        goto done;
-      }
+      if ((result = run_step(mv, elog, "morsegs vdb --sugar-mesh", reason, reason_n))) goto done;
     }
     char ply[PATH_MAX + 64];
     snprintf(ply, sizeof ply, "%s/point_cloud/iteration_%d/point_cloud.ply", it->dir, iter);
@@ -452,14 +455,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     if (ds->mesh[0]) { ev[b++] = "--mesh"; ev[b++] = ds->mesh; }
     if (e->eval_views > 0) { ev[b++] = "--max-views"; ev[b++] = views_s; }
     ev[b] = NULL;
-    rc = run_child((char *const *)ev, elog);
-    if (g_stop || rc == 130) { result = 3; goto done; }
-    if (rc != 0) {
-      log_reason(elog, reason, reason_n);
-      if (!reason[0]) snprintf(reason, reason_n, "morsegs eval exited with code %d (see %s)", rc, elog);
-      result = 1;
-      goto done;
-    }
+    if ((result = run_step(ev, elog, "morsegs eval", reason, reason_n))) goto done;
     exp_point *p = &out->pt[out->n_points];
     memset(p, 0, sizeof *p);
     p->iteration = iter;

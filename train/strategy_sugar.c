@@ -5,6 +5,7 @@
  * the count changes, so the prune needs no bookkeeping beyond mgs_model_compact. */
 #include <math.h>
 #include <stdlib.h>
+#include "core/mgs_log.h"
 #include "train/mgs_sugar.h"
 
 typedef struct sugar_strat {
@@ -33,6 +34,11 @@ static mgs_status ss_post(void *self, mgs_strategy_step *s, mgs_error *err) {
   mgs_model_compact(g, s->adam, keep);
   t->pruned = before - g->n;
   free(keep);
+  /* a model the coarse stage could not make opaque (a schedule compressed past its
+     entropy phase, or too few iterations before it) loses nearly everything here */
+  if (before > 0 && g->n * 100 < before)
+    mgs_warn("sugar: the prune at iteration %d (alpha < %g) kept %zu of %zu Gaussians: the model will not "
+             "represent the scene (too short a schedule before --sugar-prune-at?)", s->iteration, t->prune_alpha, g->n, before);
   return MGS_OK;
 }
 

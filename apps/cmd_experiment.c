@@ -109,6 +109,8 @@ static void usage(FILE *f) {
     "                         MGS_THREADS=1 --jobs 2 on a 2-core machine\n"
     "      --variant-seeds V=N  main runs of variant V with seeds 0..N-1 only (N <= --seeds; e.g. 3 for the\n"
     "                         baselines no MorseGS variant is measured against)\n"
+    "      --first LIST       in each seed, these variants' runs on every dataset come before the others'\n"
+    "                         (e.g. the baselines, so that a run stopped early compares them on every scene)\n"
     "      --plan             print the runs, how many are finished and the estimated time; train nothing\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
@@ -248,6 +250,7 @@ typedef struct variant_sel {
   int sweep_unavailable;
   char sweep_reason[1024];
   int seeds;                  /* main runs of this variant: seeds 0..seeds-1 (--variant-seeds; else --seeds) */
+  int first;                  /* --first: its runs of a seed come before the others' */
 } variant_sel;
 
 typedef struct experiment {
@@ -612,6 +615,15 @@ static void print_plan(const experiment *e, const plan_item *plan, size_t np, co
   fmt_duration(total / (e->jobs > 0 ? e->jobs : 1), b, sizeof b);
   printf("to run: %zu runs, about %s on one core; with --jobs %d (MGS_THREADS=1 each, one core per job) about %s of wall "
          "time on an otherwise idle machine\n", todo_all, a, e->jobs, b);
+  printf("next:");
+  int shown = 0;
+  for (size_t i = 0; i < np && shown < 8; i++) {
+    if (done[i]) continue;
+    const char *rel = plan[i].dir + strlen(e->dir);
+    printf("%s %s", shown ? "," : "", !strncmp(rel, "/runs/", 6) ? rel + 6 : plan[i].dir);
+    shown++;
+  }
+  printf("%s\n", shown ? (todo_all > (size_t)shown ? ", ..." : "") : " nothing");
   free(px);
 }
 
@@ -666,7 +678,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_FIRST, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -677,7 +689,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
     {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN},
-    {"variant-seeds", required_argument, 0, O_VARIANT_SEEDS},
+    {"variant-seeds", required_argument, 0, O_VARIANT_SEEDS}, {"first", required_argument, 0, O_FIRST},
     {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
@@ -685,7 +697,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
   int n_evals = 4, rc = 1, lock_fd = -1, plan_only = 0;
   e.jobs = 1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
-  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0};
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0}, firsts = {0};
   variant_def custom_defs[16];
   char custom_buf[16][512];
   size_t n_custom = 0;
@@ -698,6 +710,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_VARIANT: sl_push(&custom, optarg); break;
       case O_BASE: sl_push(&bases, optarg); break;
       case O_VARIANT_SEEDS: sl_push(&vseeds, optarg); break;
+      case O_FIRST: sl_split(&firsts, optarg); break;
       case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
@@ -844,6 +857,12 @@ int mgs_cmd_experiment(int argc, char **argv) {
       if (!strcmp(e.vars[k].def->name, vseeds.v[i])) { e.vars[k].seeds = n; found = 1; }
     if (!found) { fprintf(stderr, "morsegs experiment: --variant-seeds: '%s' is not among --variants\n", vseeds.v[i]); goto usage_fail; }
   }
+  for (size_t i = 0; i < firsts.n; i++) {
+    int found = 0;
+    for (size_t k = 0; k < e.n_vars; k++)
+      if (!strcmp(e.vars[k].def->name, firsts.v[i])) { e.vars[k].first = 1; found = 1; }
+    if (!found) { fprintf(stderr, "morsegs experiment: --first: '%s' is not among --variants\n", firsts.v[i]); goto usage_fail; }
+  }
   for (size_t i = 0; i < knobs.n; i++) {
     char *eq = strchr(knobs.v[i], '='), *colon = eq ? strrchr(eq, ':') : NULL;
     double val = colon ? strtod(colon + 1, NULL) : 0;
@@ -925,18 +944,20 @@ int mgs_cmd_experiment(int argc, char **argv) {
       printf("%s: no GT mesh: geometry and topology measures are skipped\n", d->name);
   }
   /* the plan: main runs seed by seed over every dataset (so results that stop early cover
-     every dataset and variant with the first seeds), then the sweeps */
+     every dataset and variant with the first seeds), in a seed the --first variants on every
+     dataset before the others, then the sweeps */
   size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)e.n_sweep * (size_t)e.sweep_seeds) + 1;
   plan_item *plan = calloc(cap, sizeof *plan);
   size_t np = 0;
   for (int s = 0; s < e.seeds; s++)
-    for (size_t d = 0; d < e.n_ds; d++)
-      for (size_t v = 0; v < e.n_vars; v++) {
-        if (s >= e.vars[v].seeds) continue;
-        plan_item *p = &plan[np++];
-        p->ds = d; p->var = v; p->seed = s; p->factor = 1.0;
-        snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, s);
-      }
+    for (int pass = 1; pass >= 0; pass--)
+      for (size_t d = 0; d < e.n_ds; d++)
+        for (size_t v = 0; v < e.n_vars; v++) {
+          if (s >= e.vars[v].seeds || e.vars[v].first != pass) continue;
+          plan_item *p = &plan[np++];
+          p->ds = d; p->var = v; p->seed = s; p->factor = 1.0;
+          snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, s);
+        }
   for (size_t d = 0; d < e.n_ds; d++) {
     for (size_t v = 0; v < e.n_vars; v++) {
       if (!e.vars[v].sweep) continue;
@@ -1097,7 +1118,7 @@ fail:
   free(e.runs);
   free(e.command_line);
   sl_free(&e.train_args);
-  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases); sl_free(&vseeds);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases); sl_free(&vseeds); sl_free(&firsts);
   if (lock_fd >= 0) close(lock_fd);
   mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;

@@ -16,13 +16,14 @@
 # run is ~5 CPU-minutes plus ~1.5 for its EVALS (2) evaluation points, 2DGS ~3× the
 # training, so the default plan (5 scenes × (9 variants × 5 seeds + 3 × 3 seeds) + 3 × 4 × 5
 # scenes × 3 sweep seeds = 450 runs) is about 55 CPU-hours (PLAN=1 prints the estimate):
-# run it where there are cores, or over several sessions; the proposal's baselines come
-# first in each seed and runs go seed by seed over every scene, so a run stopped early has
-# every scene and variant with its first seeds.
+# run it where there are cores, or over several sessions. Runs go seed by seed; in each seed
+# the FIRST variants (the proposal's baselines) on every scene come before the MorseGS
+# variants, so a run stopped early compares the baselines on every scene, then has every
+# scene and variant with its first seeds.
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS (2), VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
 # SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), SWEEP_VARIANTS, MORSEGS (a frozen binary for a run spread over days),
-# MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
+# FIRST ("baseline,2dgs,mini-splatting,sugar,gaussianpro"), MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
 # runs and the estimated time, train nothing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,4 +60,5 @@ MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data
   --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
   --variant-seeds sugar="${SEEDS_OTHER:-3}" --variant-seeds gaussianpro="${SEEDS_OTHER:-3}" \
   --variant-seeds topology-gs="${SEEDS_OTHER:-3}" \
-  --sweep-variants "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}" --jobs "${JOBS:-2}" ${PLAN:+--plan}
+  --sweep-variants "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}" --jobs "${JOBS:-2}" \
+  --first "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}" ${PLAN:+--plan}

@@ -96,8 +96,17 @@ int main(void) {
   CHECK_MSG(plan && strstr(plan, "5 runs") && strstr(plan, "| baseline | 3 | 0 | 3 |") && strstr(plan, "prior"),
             "plan: %s", plan ? plan : "(none)");
   CHECK_MSG(!mgs_path_exists(out), "--plan created %s", out);
+  CHECK_MSG(strstr(plan, "next: ds/baseline/seed_0, ds/bogus/seed_0, ds/baseline/seed_1,"), "plan order: %s", plan);
   free(plan);
   plan = NULL;
+  /* --first: in each seed, these variants' runs come first */
+  CHECK(mgs_test_sh("'%s'%s '%s' --first bogus --plan > '%s'", cli, cmd, ds, plan_log) == 0); /* the dataset twice */
+  mgs_read_file(plan_log, &plan, &pn, NULL);
+  CHECK_MSG(plan && strstr(plan, "next: ds/bogus/seed_0, ds_2/bogus/seed_0, ds/baseline/seed_0, ds_2/baseline/seed_0, ds/bogus/seed_1,"),
+            "plan order with --first: %s", plan ? plan : "(none)");
+  free(plan);
+  plan = NULL;
+  CHECK(mgs_test_sh("'%s'%s --first nosuch --plan > /dev/null 2>&1", cli, cmd) == 2);
   /* --variant-seeds: fewer seeds for one variant */
   CHECK(mgs_test_sh("'%s'%s --variant-seeds bogus=1 --plan > '%s'", cli, cmd, plan_log) == 0);
   mgs_read_file(plan_log, &plan, &pn, NULL);

@@ -32,6 +32,7 @@
 #include <string.h>
 #include <sys/file.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -325,6 +326,14 @@ static int run_step(const char **argv, const char *log, const char *what, char *
   return 1;
 }
 
+/* CPU seconds of this process and its waited-for children so far. */
+static double cpu_with_children(void) {
+  struct rusage s, c;
+  if (getrusage(RUSAGE_SELF, &s) || getrusage(RUSAGE_CHILDREN, &c)) return NAN;
+  return (double)(s.ru_utime.tv_sec + s.ru_stime.tv_sec + c.ru_utime.tv_sec + c.ru_stime.tv_sec) +
+         1e-6 * (double)(s.ru_utime.tv_usec + s.ru_stime.tv_usec + c.ru_utime.tv_usec + c.ru_stime.tv_usec);
+}
+
 /* Trains and evaluates one run; returns 0 done, 1 failed (recorded), 2 variant not
  * available, 3 interrupted. */
 static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason, size_t reason_n) {
@@ -412,6 +421,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   out->factor = it->factor;
   out->iters = e->iters;
   out->train_seconds = out->analysis_seconds = out->train_cpu_seconds = NAN;
+  const double eval_cpu0 = cpu_with_children(); /* the training child is waited for: not in the difference */
   {
     char *sp = mgs_path_join(it->dir, "train_stats.json"), *text = NULL;
     size_t n;
@@ -491,6 +501,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
   }
   if (out->n_points == 0) { snprintf(reason, reason_n, "%.900s: no saved model to evaluate", it->dir); result = 1; goto done; }
   out->run_seconds = mgs_now() - run_t0;
+  out->eval_cpu_seconds = cpu_with_children() - eval_cpu0;
   {
     char *rp = mgs_path_join(it->dir, "result.json");
     if (exp_run_write(rp, out, &err)) { snprintf(reason, reason_n, "%s", err.msg); result = 1; }
@@ -569,6 +580,14 @@ static double dataset_pixels(const dataset_in *d) {
   return px;
 }
 
+/* One core's seconds a finished run took: its CPU time (training, across resumes, plus its
+   evaluation points) where recorded; else its wall time, which on a shared machine and for a
+   run resumed after a stop (only its last part is timed) says less. */
+static double run_cost(const exp_run *r) {
+  if (isfinite(r->train_cpu_seconds) && isfinite(r->eval_cpu_seconds)) return r->train_cpu_seconds + r->eval_cpu_seconds;
+  return r->run_seconds;
+}
+
 /* Prints the plan and its estimated time; nothing is trained or written. */
 static void print_plan(const experiment *e, const plan_item *plan, size_t np, const unsigned char *done) {
   double base_mean = NAN;
@@ -576,7 +595,7 @@ static void print_plan(const experiment *e, const plan_item *plan, size_t np, co
     double sum = 0;
     int n = 0;
     for (size_t i = 0; i < e->n_runs; i++)
-      if (!strcmp(e->runs[i].variant, "baseline") && isfinite(e->runs[i].run_seconds)) { sum += e->runs[i].run_seconds; n++; }
+      if (!strcmp(e->runs[i].variant, "baseline") && isfinite(run_cost(&e->runs[i]))) { sum += run_cost(&e->runs[i]); n++; }
     if (n) base_mean = sum / n;
   }
   double *px = calloc(e->n_ds ? e->n_ds : 1, sizeof *px);
@@ -591,7 +610,7 @@ static void print_plan(const experiment *e, const plan_item *plan, size_t np, co
     double sum = 0, est_sum = 0;
     int n = 0;
     for (size_t i = 0; i < e->n_runs; i++)
-      if (!strcmp(e->runs[i].variant, vs->def->name) && isfinite(e->runs[i].run_seconds)) { sum += e->runs[i].run_seconds; n++; }
+      if (!strcmp(e->runs[i].variant, vs->def->name) && isfinite(run_cost(&e->runs[i]))) { sum += run_cost(&e->runs[i]); n++; }
     const char *from;
     for (size_t i = 0; i < np; i++) {
       if (plan[i].var != v) continue;

@@ -1,6 +1,7 @@
 /* morsegs experiment --plan: what a run of the plan costs, before anything starts.
  * Measured figures win over the prior: a variant with finished runs in DIR costs the mean
- * of their wall times (training, evaluations and measures: result.json's run_seconds);
+ * of their CPU times (result.json's train_cpu_seconds + eval_cpu_seconds; the wall time
+ * run_seconds for records without them);
  * a variant without costs the baseline's finished mean times its factor below; with
  * nothing finished, the prior: the baseline's CPU time per iteration and pixel, and per
  * evaluation point, as measured on the 2-core machine (docs/notes/experiment.md). */

@@ -946,7 +946,7 @@ static mgs_status read_curves(const char *path, const char *keep, exp_run **runs
       run->factor = v[3];
       run->train_seconds = v[22];
       run->analysis_seconds = v[23];
-      run->train_cpu_seconds = run->run_seconds = NAN; /* not in curves.csv */
+      run->train_cpu_seconds = run->eval_cpu_seconds = run->run_seconds = NAN; /* not in curves.csv */
     }
     if (run->n_points == EXP_MAX_POINTS) { st = mgs_error_set(err, MGS_ERR_FORMAT, "%s:%d: more than %d points in one run", path, line_no, EXP_MAX_POINTS); break; }
     exp_point *p = &run->pt[run->n_points++];

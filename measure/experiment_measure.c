@@ -206,6 +206,7 @@ mgs_status exp_run_write(const char *path, const exp_run *r, mgs_error *err) {
   add_num(o, "analysis_seconds", r->analysis_seconds);
   add_num(o, "run_seconds", r->run_seconds);
   add_num(o, "train_cpu_seconds", r->train_cpu_seconds);
+  add_num(o, "eval_cpu_seconds", r->eval_cpu_seconds);
   cJSON *pts = cJSON_AddArrayToObject(o, "points");
   for (int i = 0; i < r->n_points; i++) {
     const exp_point *p = &r->pt[i];
@@ -263,6 +264,7 @@ mgs_status exp_run_read(const char *path, exp_run *r, mgs_error *err) {
   r->analysis_seconds = get_num(o, "analysis_seconds");
   r->run_seconds = get_num(o, "run_seconds");
   r->train_cpu_seconds = get_num(o, "train_cpu_seconds");
+  r->eval_cpu_seconds = get_num(o, "eval_cpu_seconds");
   const cJSON *e;
   cJSON_ArrayForEach(e, pts) {
     exp_point *p = &r->pt[r->n_points++];

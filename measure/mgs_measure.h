@@ -45,6 +45,7 @@ typedef struct exp_run {
   double train_seconds, analysis_seconds; /* analysis: NAN when the run does not report one */
   double run_seconds;          /* wall time of training, evaluations and measures (NAN in older records) */
   double train_cpu_seconds;    /* CPU time of the training steps (NAN in older records) */
+  double eval_cpu_seconds;     /* CPU time of the evaluation points: eval, vdb and measures (NAN in older records) */
   int n_points;
   exp_point pt[EXP_MAX_POINTS];
 } exp_run;

@@ -201,6 +201,19 @@ int main(void) {
     snprintf(path, sizeof path, "%s/%s", out, files[i]);
     CHECK_MSG(mgs_path_exists(path), "%s missing", path);
   }
+  /* each finished run records its CPU time, training and evaluation (what --plan estimates from) */
+  {
+    char *rj = NULL;
+    size_t rn = 0;
+    snprintf(path, sizeof path, "%s/runs/ds/baseline/seed_0/result.json", out);
+    mgs_read_file(path, &rj, &rn, NULL);
+    cJSON *r = cJSON_Parse(rj ? rj : "");
+    const cJSON *tc = cJSON_GetObjectItem(r, "train_cpu_seconds"), *ec = cJSON_GetObjectItem(r, "eval_cpu_seconds");
+    CHECK_MSG(cJSON_IsNumber(tc) && tc->valuedouble > 0 && cJSON_IsNumber(ec) && ec->valuedouble > 0,
+              "result.json without CPU seconds: %s", rj ? rj : "(none)");
+    cJSON_Delete(r);
+    free(rj);
+  }
   /* no temporary file of an interrupted atomic write is left behind */
   for (int k = 0; k < 2; k++) {
     snprintf(path, sizeof path, "%s%s", out, k ? "/plots" : "");

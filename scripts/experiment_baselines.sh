@@ -23,6 +23,7 @@
 #   scripts/experiment_baselines.sh [DIR]   (default exp-baselines; build/ must hold morsegs)
 # RES, ITERS, SCALE, SEEDS, EVALS (2), VIEWS, TEST_VIEWS, SCENES ("sphere genus2 thin hinge lever"),
 # SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), SWEEP_VARIANTS, MORSEGS (a frozen binary for a run spread over days),
+# VARIANTS (the twelve above; --base, --variant-seeds, SWEEP_VARIANTS and FIRST keep the listed ones),
 # FIRST ("baseline,2dgs,mini-splatting,sugar,gaussianpro"), MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
 # runs and the estimated time, train nothing).
 set -euo pipefail
@@ -49,6 +50,15 @@ for b in $SCENES; do
   fi
   data+=("$dir/scenes/$b")
 done
+V=${VARIANTS:-baseline,2dgs,mini-splatting,sugar,gaussianpro,topology-gs,morse-r,2dgs-morse-r,ms-morse-r,morse-full,morse-d,morse-i}
+has() { case ",$V," in *",$1,"*) return 0 ;; esac; return 1; }
+keep() { local out= x; for x in ${1//,/ }; do has "$x" && out=${out:+$out,}$x; done; echo "$out"; }
+extra=()
+has 2dgs-morse-r && has 2dgs && extra+=(--base 2dgs-morse-r=2dgs)
+has ms-morse-r && has mini-splatting && extra+=(--base ms-morse-r=mini-splatting)
+for v in sugar gaussianpro topology-gs; do has $v && extra+=(--variant-seeds "$v=${SEEDS_OTHER:-3}"); done
+sv=$(keep "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}"); [ -n "$sv" ] && extra+=(--sweep-variants "$sv")
+fv=$(keep "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}"); [ -n "$fv" ] && extra+=(--first "$fv")
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
   --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" --sweep-seeds "${SWEEP_SEEDS:-3}" \
   --train-arg=--schedule-scale="$SCALE" \
@@ -56,9 +66,4 @@ MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data
   --variant mini-splatting="--strategy mini-splatting" \
   --variant ms-morse-r="--strategy mini-splatting --preset morse-r" \
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
-  --variants baseline,2dgs,mini-splatting,sugar,gaussianpro,topology-gs,morse-r,2dgs-morse-r,ms-morse-r,morse-full,morse-d,morse-i \
-  --base 2dgs-morse-r=2dgs --base ms-morse-r=mini-splatting \
-  --variant-seeds sugar="${SEEDS_OTHER:-3}" --variant-seeds gaussianpro="${SEEDS_OTHER:-3}" \
-  --variant-seeds topology-gs="${SEEDS_OTHER:-3}" \
-  --sweep-variants "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}" --jobs "${JOBS:-2}" \
-  --first "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}" ${PLAN:+--plan}
+  --variants "$V" "${extra[@]}" --jobs "${JOBS:-2}" ${PLAN:+--plan}

@@ -4,8 +4,12 @@ hypothesis, the change against the baseline per dataset (mean over seeds) and th
 counted (after Holm's correction when the report has it). Prints Markdown (the README's verdict table is this script's output).
 
 usage: scripts/experiment_summary.py [--compact] DIR/RESULTS.json
+       scripts/experiment_summary.py --compare A/RESULTS.json B/RESULTS.json
   --compact: one row per variant, one cell per hypothesis (verdict counts over the datasets
   and the range of the mean changes), printed before the per-dataset tables.
+  --compare: every cell (dataset, variant, hypothesis) that both experiments measured, the
+  verdict and mean change of each side by side, and the cells whose verdict differs (e.g.
+  the compressed schedule against the full 30,000 iterations: does any verdict change?).
 """
 import json
 import os
@@ -73,7 +77,50 @@ def compact(d, variants):
     print()
 
 
+def cells_of(d):
+    """(dataset, variant, hypothesis) -> the hypothesis record, for every measured cell."""
+    out = {}
+    for ds in d["datasets"]:
+        for v in ds["variants"]:
+            for key, _, _ in HYPS:
+                h = v.get("hypotheses", {}).get(key)
+                if h and word(h) not in (None, "n/a"):
+                    out[(ds["name"], v["name"], key)] = h
+    return out
+
+
+def compare(path_a, path_b):
+    """The cells both experiments measured, side by side; returns the number that differ."""
+    with open(path_a) as f:
+        a = json.load(f)
+    with open(path_b) as f:
+        b = json.load(f)
+    ca, cb = cells_of(a), cells_of(b)
+    common = [k for k in ca if k in cb]
+    units = {key: unit for key, _, unit in HYPS}
+    print("A: %s (%d iterations, %d of %d runs); B: %s (%d iterations, %d of %d runs); %d cells in both, "
+          "%d only in A, %d only in B.\n" % (path_a, a["iterations"], a["runs_finished"], a["runs_planned"], path_b,
+                                            b["iterations"], b["runs_finished"], b["runs_planned"], len(common),
+                                            len(ca) - len(common), len(cb) - len(common)))
+    print("| dataset | variant | hypothesis | A | B | same verdict |")
+    print("|---|---|---|---|---|---|")
+    differ = 0
+    for k in common:
+        u = units[k[2]]
+        wa, wb = word(ca[k]), word(cb[k])
+        differ += wa != wb
+        print("| %s | %s | %s | %s (%s) | %s (%s) | %s |" % (k[0], k[1], k[2], fmt(ca[k], u), wa, fmt(cb[k], u), wb,
+                                                        "yes" if wa == wb else "**no**"))
+    print("\n%d of %d verdicts differ between A and B." % (differ, len(common)))
+    return differ
+
+
 def main():
+    if sys.argv[1:2] == ["--compare"]:
+        if len(sys.argv) != 4:
+            sys.exit(__doc__)
+        compare(sys.argv[2], sys.argv[3])
+        return
     want_compact = "--compact" in sys.argv[1:]
     args = [a for a in sys.argv[1:] if a != "--compact"]
     if len(args) != 1:

@@ -97,6 +97,8 @@ static void usage(FILE *f) {
     "      --variant NAME=ARGS  an extra variant: NAME trained with `morsegs train ... ARGS` (ARGS split at\n"
     "                         spaces; listed in --variants when that is given)\n"
     "      --sweep-variants LIST  variants swept (default: baseline,morse-d,morse-full)\n"
+    "      --sweep-of V=LIST  variant V's own multipliers instead of --sweep's (a knob with a bounded range:\n"
+    "                         --knob mini-splatting=--simplify-fraction:0.5 --sweep-of mini-splatting=0.25,0.5,1.5,2)\n"
     "      --sweep-seeds N    seeds per sweep point (--seeds: H3's Pareto front uses every seed)\n"
     "      --base V=B         measure variant V's changes against variant B instead of baseline (MorseGS\n"
     "                         on another method: --variant 2dgs=--model 2dgs --base morse-2dgs=2dgs)\n"
@@ -252,6 +254,8 @@ typedef struct variant_sel {
   char sweep_reason[1024];
   int seeds;                  /* main runs of this variant: seeds 0..seeds-1 (--variant-seeds; else --seeds) */
   int first;                  /* --first: its runs of a seed come before the others' */
+  double sweep_of[16];        /* --sweep-of: this variant's multipliers instead of --sweep's */
+  int n_sweep_of;             /* -1: --sweep's */
 } variant_sel;
 
 typedef struct experiment {
@@ -296,11 +300,14 @@ static mgs_status write_report(experiment *e, mgs_error *err) {
   char knobs[4096] = "";
   for (size_t v = 0; v < e->n_vars; v++) {
     vs[v] = e->vars[v].status;
-    if (e->vars[v].sweep && e->n_sweep) {
+    const variant_sel *sv = &e->vars[v];
+    const int n_mult = sv->n_sweep_of >= 0 ? sv->n_sweep_of : e->n_sweep;
+    const double *mult = sv->n_sweep_of >= 0 ? sv->sweep_of : e->sweep;
+    if (sv->sweep && n_mult) {
       size_t l = strlen(knobs);
       snprintf(knobs + l, sizeof knobs - l, "%s%s: %s %g x {1", l ? "; " : "", e->vars[v].def->name, e->vars[v].knob,
                e->vars[v].knob_default);
-      for (int k = 0; k < e->n_sweep; k++) { l = strlen(knobs); snprintf(knobs + l, sizeof knobs - l, ", %g", e->sweep[k]); }
+      for (int k = 0; k < n_mult; k++) { l = strlen(knobs); snprintf(knobs + l, sizeof knobs - l, ", %g", mult[k]); }
       l = strlen(knobs);
       snprintf(knobs + l, sizeof knobs - l, "}%s%.300s", e->vars[v].sweep_unavailable ? " (not available: " : "",
                e->vars[v].sweep_unavailable ? e->vars[v].sweep_reason : "");
@@ -697,7 +704,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_FIRST, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_FIRST, O_SWEEP_OF, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -709,6 +716,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
     {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN},
     {"variant-seeds", required_argument, 0, O_VARIANT_SEEDS}, {"first", required_argument, 0, O_FIRST},
+    {"sweep-of", required_argument, 0, O_SWEEP_OF},
     {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
   experiment e;
   memset(&e, 0, sizeof e);
@@ -716,7 +724,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
   int n_evals = 4, rc = 1, lock_fd = -1, plan_only = 0;
   e.jobs = 1;
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
-  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0}, firsts = {0};
+  strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0}, firsts = {0}, sweep_ofs = {0};
   variant_def custom_defs[16];
   char custom_buf[16][512];
   size_t n_custom = 0;
@@ -730,6 +738,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_BASE: sl_push(&bases, optarg); break;
       case O_VARIANT_SEEDS: sl_push(&vseeds, optarg); break;
       case O_FIRST: sl_split(&firsts, optarg); break;
+      case O_SWEEP_OF: sl_push(&sweep_ofs, optarg); break;
       case O_SEEDS: if (!parse_int(optarg, "--seeds", 1, &e.seeds) || e.seeds > 64) { fprintf(stderr, "morsegs experiment: --seeds must be 1..64\n"); return 2; } break;
       case O_ITERS: if (!parse_int(optarg, "--iters", 1, &e.iters)) return 2; break;
       case O_EVALS: if (!parse_int(optarg, "--evals", 1, &n_evals) || n_evals > EXP_MAX_POINTS) { fprintf(stderr, "morsegs experiment: --evals must be 1..%d\n", EXP_MAX_POINTS); return 2; } break;
@@ -876,6 +885,26 @@ int mgs_cmd_experiment(int argc, char **argv) {
       if (!strcmp(e.vars[k].def->name, vseeds.v[i])) { e.vars[k].seeds = n; found = 1; }
     if (!found) { fprintf(stderr, "morsegs experiment: --variant-seeds: '%s' is not among --variants\n", vseeds.v[i]); goto usage_fail; }
   }
+  for (size_t k = 0; k < e.n_vars; k++) e.vars[k].n_sweep_of = -1;
+  for (size_t i = 0; i < sweep_ofs.n; i++) {
+    char *eq = strchr(sweep_ofs.v[i], '=');
+    variant_sel *v = NULL;
+    if (eq) {
+      *eq = 0;
+      for (size_t k = 0; k < e.n_vars; k++) if (!strcmp(e.vars[k].def->name, sweep_ofs.v[i])) v = &e.vars[k];
+    }
+    if (!eq || !v) { fprintf(stderr, "morsegs experiment: --sweep-of needs VARIANT=LIST with VARIANT among --variants (got '%s')\n", sweep_ofs.v[i]); goto usage_fail; }
+    strlist l = {0};
+    sl_split(&l, eq + 1);
+    v->n_sweep_of = 0;
+    for (size_t j = 0; j < l.n; j++) {
+      char *end;
+      double f = strtod(l.v[j], &end);
+      if (*end || !(f > 0) || !isfinite(f)) { fprintf(stderr, "morsegs experiment: --sweep-of %s: multipliers must be positive (got '%s')\n", sweep_ofs.v[i], l.v[j]); sl_free(&l); goto usage_fail; }
+      if (f != 1.0 && v->n_sweep_of < 16) v->sweep_of[v->n_sweep_of++] = f;
+    }
+    sl_free(&l);
+  }
   for (size_t i = 0; i < firsts.n; i++) {
     int found = 0;
     for (size_t k = 0; k < e.n_vars; k++)
@@ -965,7 +994,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
   /* the plan: main runs seed by seed over every dataset (so results that stop early cover
      every dataset and variant with the first seeds), in a seed the --first variants on every
      dataset before the others, then the sweeps */
-  size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)e.n_sweep * (size_t)e.sweep_seeds) + 1;
+  size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)16 * (size_t)e.sweep_seeds) + 1;
   plan_item *plan = calloc(cap, sizeof *plan);
   size_t np = 0;
   for (int s = 0; s < e.seeds; s++)
@@ -980,11 +1009,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
   for (size_t d = 0; d < e.n_ds; d++) {
     for (size_t v = 0; v < e.n_vars; v++) {
       if (!e.vars[v].sweep) continue;
-      for (int k = 0; k < e.n_sweep; k++)
+      const int n_mult = e.vars[v].n_sweep_of >= 0 ? e.vars[v].n_sweep_of : e.n_sweep;
+      const double *mult = e.vars[v].n_sweep_of >= 0 ? e.vars[v].sweep_of : e.sweep;
+      for (int k = 0; k < n_mult; k++)
         for (int s = 0; s < e.sweep_seeds; s++) {
           plan_item *p = &plan[np++];
-          p->ds = d; p->var = v; p->seed = s; p->factor = e.sweep[k]; p->sweep = 1;
-          snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/sweep_x%g_seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, e.sweep[k], s);
+          p->ds = d; p->var = v; p->seed = s; p->factor = mult[k]; p->sweep = 1;
+          snprintf(p->dir, sizeof p->dir, "%s/runs/%s/%s/sweep_x%g_seed_%d", e.dir, e.ds[d].name, e.vars[v].def->name, mult[k], s);
         }
     }
   }
@@ -1137,7 +1168,7 @@ fail:
   free(e.runs);
   free(e.command_line);
   sl_free(&e.train_args);
-  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases); sl_free(&vseeds); sl_free(&firsts);
+  sl_free(&knobs); sl_free(&vlist); sl_free(&svlist); sl_free(&custom); sl_free(&bases); sl_free(&vseeds); sl_free(&firsts); sl_free(&sweep_ofs);
   if (lock_fd >= 0) close(lock_fd);
   mgs_diagram_plot_release(); /* cairo's and fontconfig's caches (the report's plots) */
   return rc;

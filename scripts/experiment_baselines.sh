@@ -9,8 +9,9 @@
 #   sugar, gaussianpro, topology-gs                    the other baselines
 #   morse-d, morse-i                                   MorseGS' other components on 3DGS
 # SuGaR, GaussianPro and Topology-GS (no MorseGS variant sits on them) with SEEDS_OTHER (3)
-# seeds. H3's Pareto fronts (SWEEP_VARIANTS): baseline and mini-splatting swept by
-# --grad-threshold, morse-d by its spawning knob --gap-max, each ×{0.25,0.5,2,4}.
+# seeds. H3's Pareto fronts (SWEEP_VARIANTS): baseline swept by --grad-threshold and morse-d
+# by its spawning knob --gap-max, each ×{0.25,0.5,2,4}; mini-splatting by its simplification
+# fraction (--simplify-fraction 0.5 × {0.25,0.5,1.5,2}: 0.125 … 1, the flag's range).
 # Resumable: finished runs are kept and a run cut off continues from its checkpoint (a
 # session's processes end when it stops). Cost (2-core machine): a 7500-iteration 200² 3DGS
 # run is ~5 CPU-minutes plus ~1.5 for its EVALS (2) evaluation points, 2DGS ~3× the
@@ -58,6 +59,7 @@ has 2dgs-morse-r && has 2dgs && extra+=(--base 2dgs-morse-r=2dgs)
 has ms-morse-r && has mini-splatting && extra+=(--base ms-morse-r=mini-splatting)
 for v in sugar gaussianpro topology-gs; do has $v && extra+=(--variant-seeds "$v=${SEEDS_OTHER:-3}"); done
 sv=$(keep "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}"); [ -n "$sv" ] && extra+=(--sweep-variants "$sv")
+has mini-splatting && extra+=(--knob mini-splatting=--simplify-fraction:0.5 --sweep-of mini-splatting=0.25,0.5,1.5,2)
 fv=$(keep "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}"); [ -n "$fv" ] && extra+=(--first "$fv")
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
   --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" --sweep-seeds "${SWEEP_SEEDS:-3}" \

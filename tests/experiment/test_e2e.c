@@ -107,6 +107,15 @@ int main(void) {
   free(plan);
   plan = NULL;
   CHECK(mgs_test_sh("'%s'%s --first nosuch --plan > /dev/null 2>&1", cli, cmd) == 2);
+  /* --sweep-of: one variant's own multipliers (a knob with a bounded range) */
+  CHECK(mgs_test_sh("'%s'%s --sweep-of baseline=3,1,0.5 --plan > '%s'", cli, cmd, plan_log) == 0);
+  mgs_read_file(plan_log, &plan, &pn, NULL);
+  CHECK_MSG(plan && strstr(plan, "6 runs") && strstr(plan, "ds/bogus/seed_1, ds/baseline/sweep_x3_seed_0, ds/baseline/sweep_x0.5_seed_0\n"),
+            "plan with --sweep-of: %s", plan ? plan : "(none)");
+  free(plan);
+  plan = NULL;
+  CHECK(mgs_test_sh("'%s'%s --sweep-of nosuch=2 --plan > /dev/null 2>&1", cli, cmd) == 2);
+  CHECK(mgs_test_sh("'%s'%s --sweep-of baseline=-1 --plan > /dev/null 2>&1", cli, cmd) == 2);
   /* --variant-seeds: fewer seeds for one variant */
   CHECK(mgs_test_sh("'%s'%s --variant-seeds bogus=1 --plan > '%s'", cli, cmd, plan_log) == 0);
   mgs_read_file(plan_log, &plan, &pn, NULL);

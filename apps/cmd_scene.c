@@ -19,7 +19,10 @@ static void scene_usage(FILE *f) {
           "       morsegs scene --list\n"
           "Renders a NeRF-synthetic dataset (train/ and test/ RGBA PNGs, transforms_{train,test}.json,\n"
           "gt_mesh.ply normalized to [-1,1]^3, points3d.ply initial points, scene.json) with Embree.\n"
-          "MESH: OBJ, PLY, OFF (anything assimp reads). Must be closed and manifold unless --allow-open.\n\n"
+          "MESH: OBJ, PLY, OFF (anything assimp reads). Must be closed and manifold unless --allow-open.\n"
+          "Appearance: the mesh's own diffuse texture (its material's, through its UVs; path relative to\n"
+          "MESH; TGA/PNG/JPEG) where it has one, else its vertex colours, else a procedural 3D texture;\n"
+          "a texture that cannot be read is a warning and falls back. scene.json records the choice.\n\n"
           "options:\n"
           "  -o, --output DIR      output folder (must not exist, be empty, or hold a dataset with --force)\n"
           "      --builtin NAME    a built-in procedural scene instead of MESH (see --list)\n"
@@ -39,6 +42,8 @@ static void scene_usage(FILE *f) {
           "      --specular        add a Blinn-Phong highlight (view-dependent colour)\n"
           "      --texture-scale F finer (F > 1) or coarser procedural texture (1); F = 4 gives SIFT\n"
           "                        enough corners for COLMAP (scripts/colmap_scene.sh)\n"
+          "      --procedural-texture  the procedural texture even where the mesh has its own texture\n"
+          "                        or vertex colours (e.g. a texture with too little detail for SIFT)\n"
           "      --spp N           N x N antialiasing samples per pixel (4)\n"
           "      --white, --black  background colour under transparent pixels (white)\n"
           "      --init MODE       initial points: surface (noisy surface samples, SfM stand-in),\n"
@@ -78,7 +83,7 @@ static void list_builtins(void) {
 
 enum { OPT_BUILTIN = 256, OPT_DETAIL, OPT_LIST, OPT_VIEWS, OPT_TEST_VIEWS, OPT_WIDTH, OPT_HEIGHT, OPT_FOV, OPT_RADIUS,
        OPT_HEMI, OPT_SPEC, OPT_TEXTURE, OPT_SPP, OPT_WHITE, OPT_BLACK, OPT_INIT, OPT_INIT_POINTS, OPT_INIT_NOISE, OPT_SEED,
-       OPT_ALLOW_OPEN, OPT_FORCE, OPT_SIZE };
+       OPT_ALLOW_OPEN, OPT_FORCE, OPT_SIZE, OPT_PROCEDURAL };
 
 int mgs_cmd_scene(int argc, char **argv) {
   static const struct option longopts[] = {
@@ -89,7 +94,7 @@ int mgs_cmd_scene(int argc, char **argv) {
       {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT},
       {"fov", required_argument, 0, OPT_FOV}, {"radius", required_argument, 0, OPT_RADIUS},
       {"hemisphere", no_argument, 0, OPT_HEMI}, {"specular", no_argument, 0, OPT_SPEC},
-      {"texture-scale", required_argument, 0, OPT_TEXTURE},
+      {"texture-scale", required_argument, 0, OPT_TEXTURE}, {"procedural-texture", no_argument, 0, OPT_PROCEDURAL},
       {"spp", required_argument, 0, OPT_SPP}, {"white", no_argument, 0, OPT_WHITE}, {"black", no_argument, 0, OPT_BLACK},
       {"init", required_argument, 0, OPT_INIT}, {"init-points", required_argument, 0, OPT_INIT_POINTS},
       {"init-noise", required_argument, 0, OPT_INIT_NOISE}, {"seed", required_argument, 0, OPT_SEED},
@@ -124,6 +129,7 @@ int mgs_cmd_scene(int argc, char **argv) {
     case OPT_HEMI: o.hemisphere = 1; break;
     case OPT_SPEC: o.specular = 1; break;
     case OPT_TEXTURE: ok = parse_double(optarg, &dv) && dv > 0 && dv <= 1000; o.texture_scale = dv; break;
+    case OPT_PROCEDURAL: o.procedural_texture = 1; break;
     case OPT_SPP: ok = parse_long(optarg, 1, 16, &lv); o.spp = (int)lv; break;
     case OPT_WHITE: o.white_background = 1; break;
     case OPT_BLACK: o.white_background = 0; break;
@@ -198,6 +204,7 @@ int mgs_cmd_scene(int argc, char **argv) {
          is_city ? "world units" : "normalized to [-1,1]^3");
   if (o.init != MGS_SCENE_INIT_NONE)
     printf(", points3d.ply (%zu %s points)", o.init_points ? o.init_points : (o.init == MGS_SCENE_INIT_RANDOM ? 100000 : 10000), init_names[o.init]);
+  printf("\n  appearance: %s", st.appearance ? st.appearance : "procedural");
   printf("\n  %.2f s (%.2f s ray casting, %.3g Mrays/s)\n", st.total_seconds, st.render_seconds,
          st.render_seconds > 0 ? st.rays / st.render_seconds * 1e-6 : 0.0);
   return 0;

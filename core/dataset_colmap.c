@@ -1,7 +1,9 @@
 /* COLMAP sparse models: sparse/0/{cameras,images,points3D}.{bin,txt} (binary preferred,
  * as the reference) with images in images/. Only undistorted pinhole cameras
  * (PINHOLE, SIMPLE_PINHOLE) are accepted. COLMAP poses are world-to-camera in the
- * OpenCV convention: X_cam = R(q) X + t with q = (qw, qx, qy, qz). */
+ * OpenCV convention: X_cam = R(q) X + t with q = (qw, qx, qy, qz). A gt_mesh.ply beside
+ * sparse/ is the ground-truth mesh, taken to be in the model's frame (no normalisation
+ * here: the poses are used as stored). */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -413,6 +415,11 @@ mgs_status mgs_dataset_load_colmap(mgs_dataset *d, const mgs_dataset_options *o,
   else mgs_pending_free(pv, npv);
   if (st == MGS_OK && mgs_file_exists(pp))
     st = bin ? read_points_bin(pp, &d->init_points, err) : read_points_txt(pp, &d->init_points, err);
+  if (st == MGS_OK) { /* a GT mesh in the model's (SfM) frame, as scripts/colmap_scene.sh writes it */
+    char *mesh = mgs_path_join(d->root, "gt_mesh.ply");
+    if (mesh && mgs_file_exists(mesh)) d->mesh_path = mesh;
+    else free(mesh);
+  }
   model_free(&m);
   free(pc);
   free(pi);

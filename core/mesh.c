@@ -25,7 +25,26 @@ void mgs_mesh_destroy(mgs_mesh *m) {
   if (!m) return;
   free(m->v);
   free(m->t);
+  free(m->uv);
+  free(m->rgb);
+  free(m->texture);
   free(m);
+}
+
+mgs_mesh *mgs_mesh_clone(const mgs_mesh *m) {
+  if (!m) return NULL;
+  mgs_mesh *c = mgs_mesh_create(m->nv, m->nt);
+  if (!c) return NULL;
+  memcpy(c->v, m->v, sizeof(float) * 3 * m->nv);
+  memcpy(c->t, m->t, sizeof(uint32_t) * 3 * m->nt);
+  int ok = 1;
+  if (m->uv && (c->uv = malloc(sizeof(float) * 6 * m->nt))) memcpy(c->uv, m->uv, sizeof(float) * 6 * m->nt);
+  else ok = !m->uv;
+  if (ok && m->rgb && (c->rgb = malloc(sizeof(float) * 9 * m->nt))) memcpy(c->rgb, m->rgb, sizeof(float) * 9 * m->nt);
+  else ok = ok && !m->rgb;
+  if (ok && m->texture && !(c->texture = mgs_strdup(m->texture))) ok = 0;
+  if (!ok) { mgs_mesh_destroy(c); return NULL; }
+  return c;
 }
 
 static const char *ext_of(const char *path) {

@@ -1,6 +1,7 @@
 /* Mesh reading through assimp's C API: any format it reads (OBJ, PLY, OFF, ...),
  * triangulated, all meshes merged, vertices at identical positions welded (OBJ files
- * split vertices by normal or texture coordinate). Counts are checked against the file
+ * split vertices by normal or texture coordinate), with the appearance kept per triangle
+ * corner (UVs of the first diffuse texture, vertex colours; core/mgs_mesh.h). Counts are checked against the file
  * size before assimp reads (mesh_check.c) and assimp validates what it read before its
  * other post-processing steps (aiProcess_ValidateDataStructure runs first); assimp runs in
  * a forked child under an address-space cap, so a crash inside it is an error message. */
@@ -74,6 +75,83 @@ static void log_cb(const char *msg, char *user) {
   }
 }
 
+/* The diffuse texture of material `mi` (its first), or 0 when it has none. */
+static int diffuse_texture(const struct aiScene *sc, unsigned mi, struct aiString *tex, unsigned *uv_channel) {
+  if (mi >= sc->mNumMaterials) return 0;
+  const struct aiMaterial *mat = sc->mMaterials[mi];
+  if (aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE) == 0) return 0;
+  unsigned uvi = 0;
+  if (aiGetMaterialTexture(mat, aiTextureType_DIFFUSE, 0, tex, NULL, &uvi, NULL, NULL, NULL, NULL) != aiReturn_SUCCESS || tex->length == 0)
+    return 0;
+  *uv_channel = uvi < AI_MAX_NUMBER_OF_TEXTURECOORDS ? uvi : 0;
+  return 1;
+}
+
+/* The texture file's path: relative ones against the mesh file's folder; Windows
+   separators (common in exported .mtl files) become '/'. */
+static char *resolve_texture(const char *mesh_path, const struct aiString *tex) {
+  char rel[sizeof tex->data + 1];
+  memcpy(rel, tex->data, tex->length);
+  rel[tex->length] = 0;
+  for (char *c = rel; *c; c++)
+    if (*c == '\\') *c = '/';
+  const char *r = rel;
+  if (!strncmp(r, "file://", 7)) r += 7;
+  while (r[0] == '.' && r[1] == '/') r += 2;
+  const char *slash = strrchr(mesh_path, '/');
+  size_t dn = (r[0] == '/' || !slash) ? 0 : (size_t)(slash - mesh_path) + 1;
+  char *out = malloc(dn + strlen(r) + 1);
+  if (!out) return NULL;
+  memcpy(out, mesh_path, dn);
+  strcpy(out + dn, r);
+  return out;
+}
+
+/* Per-corner UVs (of the chosen texture's materials) and colours; NaN where absent. */
+static mgs_status import_appearance(const char *path, const struct aiScene *sc, mgs_mesh *m, mgs_error *err) {
+  struct aiString chosen = {0}, tex;
+  int have_tex = 0, have_rgb = 0;
+  for (unsigned i = 0; i < sc->mNumMeshes; i++) {
+    const struct aiMesh *am = sc->mMeshes[i];
+    unsigned ch = 0;
+    if (!have_tex && diffuse_texture(sc, am->mMaterialIndex, &tex, &ch) && am->mTextureCoords[ch]) { chosen = tex; have_tex = 1; }
+    if (am->mColors[0]) have_rgb = 1;
+  }
+  if (have_tex && !(m->uv = malloc(sizeof(float) * 6 * m->nt))) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  if (have_rgb && !(m->rgb = malloc(sizeof(float) * 9 * m->nt))) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  if (have_tex && !(m->texture = resolve_texture(path, &chosen))) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
+  size_t to = 0;
+  for (unsigned i = 0; i < sc->mNumMeshes; i++) {
+    const struct aiMesh *am = sc->mMeshes[i];
+    unsigned ch = 0;
+    const int uses = have_tex && diffuse_texture(sc, am->mMaterialIndex, &tex, &ch) && tex.length == chosen.length &&
+                     !memcmp(tex.data, chosen.data, tex.length) && am->mTextureCoords[ch];
+    for (unsigned f = 0; f < am->mNumFaces; f++) {
+      const struct aiFace *fc = &am->mFaces[f];
+      if (fc->mNumIndices != 3) continue; /* as the geometry */
+      for (int k = 0; k < 3; k++) {
+        const unsigned vi = fc->mIndices[k];
+        if (m->uv) {
+          float *uv = m->uv + 6 * to + 2 * k;
+          uv[0] = uses ? am->mTextureCoords[ch][vi].x : NAN;
+          uv[1] = uses ? am->mTextureCoords[ch][vi].y : NAN;
+          if (!isfinite(uv[0]) || !isfinite(uv[1])) uv[0] = uv[1] = NAN;
+        }
+        if (m->rgb) {
+          float *c = m->rgb + 9 * to + 3 * k;
+          const struct aiColor4D *col = am->mColors[0] ? &am->mColors[0][vi] : NULL;
+          for (int j = 0; j < 3; j++) {
+            float x = col ? (j == 0 ? col->r : j == 1 ? col->g : col->b) : NAN;
+            c[j] = isfinite(x) ? (x < 0 ? 0 : x > 1 ? 1 : x) : NAN;
+          }
+        }
+      }
+      to++;
+    }
+  }
+  return MGS_OK;
+}
+
 static mgs_status import_assimp(const char *path, mgs_mesh **out, mgs_error *err) {
   *out = NULL;
   log_error[0] = 0;
@@ -132,6 +210,7 @@ static mgs_status import_assimp(const char *path, mgs_mesh **out, mgs_error *err
     }
     vo += am->mNumVertices;
   }
+  if (status == MGS_OK) status = import_appearance(path, sc, m, err);
   aiReleaseImport(sc);
   if (status != MGS_OK) {
     mgs_mesh_destroy(m);
@@ -166,7 +245,9 @@ static int read_all(int fd, void *p, size_t n) {
 }
 
 /* The child: assimp on the file under an address-space cap; sends back
- * status (int32), then the message (256 bytes) or nv, nt (u64) and the arrays. */
+ * status (int32), then the message (256 bytes) or nv, nt (u64), the arrays, a flags byte
+ * (1: uv, 2: rgb follow) with those arrays, and the texture path's length (u32, 0 = none)
+ * and bytes. */
 /* Present when built with a sanitizer (weak: null otherwise). */
 extern void __sanitizer_set_death_callback(void (*)(void)) __attribute__((weak));
 
@@ -196,8 +277,31 @@ _Noreturn static void child_import(int fd, const char *path, size_t file_bytes) 
     uint64_t nv = m->nv, nt = m->nt;
     ok = ok && write_all(fd, &nv, 8) && write_all(fd, &nt, 8) && write_all(fd, m->v, sizeof(float) * 3 * m->nv) &&
          write_all(fd, m->t, sizeof(uint32_t) * 3 * m->nt);
+    const uint8_t flags = (uint8_t)((m->uv ? 1 : 0) | (m->rgb ? 2 : 0));
+    const uint32_t tl = m->texture ? (uint32_t)strlen(m->texture) : 0;
+    ok = ok && write_all(fd, &flags, 1) && (!m->uv || write_all(fd, m->uv, sizeof(float) * 6 * m->nt)) &&
+         (!m->rgb || write_all(fd, m->rgb, sizeof(float) * 9 * m->nt)) && write_all(fd, &tl, 4) &&
+         (!tl || write_all(fd, m->texture, tl));
   }
   _exit(ok ? 0 : 3);
+}
+
+/* The child's appearance arrays (see child_import); 0 when the pipe ends early. */
+static int read_appearance(int fd, mgs_mesh *m, mgs_status *status, const char *path, mgs_error *err) {
+  uint8_t flags = 0;
+  uint32_t tl = 0;
+  if (!read_all(fd, &flags, 1) || flags > 3) return 0;
+  if ((flags & 1) && !(m->uv = malloc(sizeof(float) * 6 * m->nt))) { *status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); return 1; }
+  if ((flags & 2) && !(m->rgb = malloc(sizeof(float) * 9 * m->nt))) { *status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); return 1; }
+  if ((m->uv && !read_all(fd, m->uv, sizeof(float) * 6 * m->nt)) || (m->rgb && !read_all(fd, m->rgb, sizeof(float) * 9 * m->nt)) ||
+      !read_all(fd, &tl, 4) || tl > 4096)
+    return 0;
+  if (tl) {
+    if (!(m->texture = malloc((size_t)tl + 1))) { *status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); return 1; }
+    if (!read_all(fd, m->texture, tl)) return 0;
+    m->texture[tl] = 0;
+  }
+  return 1;
 }
 
 mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
@@ -243,6 +347,7 @@ mgs_status mgs_mesh_read(const char *path, mgs_mesh **out, mgs_error *err) {
     if (got) m = mgs_mesh_create((size_t)nv, (size_t)nt);
     if (got && !m) status = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path);
     else if (got) got = read_all(fds[0], m->v, sizeof(float) * 3 * m->nv) && read_all(fds[0], m->t, sizeof(uint32_t) * 3 * m->nt);
+    if (got && status == MGS_OK) got = read_appearance(fds[0], m, &status, path, err);
   }
   close(fds[0]);
   int ws = 0;

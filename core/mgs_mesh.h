@@ -1,6 +1,7 @@
 /* Triangle meshes: read (OBJ, PLY, OFF, anything assimp reads, triangulated, merged into
- * one vertex/index list), write (PLY binary or OBJ by extension, atomically), normalize
- * and measure. */
+ * one vertex/index list, with the file's appearance when it has one: texture coordinates,
+ * the diffuse texture's path, vertex colours), write (PLY binary or OBJ by extension,
+ * atomically; geometry only), normalize and measure. */
 #ifndef MGS_MESH_H
 #define MGS_MESH_H
 #include <stddef.h>
@@ -15,10 +16,21 @@ typedef struct mgs_mesh {
   size_t nv, nt;
   float *v;      /* nv*3 positions */
   uint32_t *t;   /* nt*3 vertex indices, counter-clockwise = outward */
+  /* Optional appearance (NULL when the file has none). Stored per triangle corner, not per
+     vertex: the read welds vertices by position (topology needs it) and a texture seam
+     gives one position two UVs. A triangle that has no value holds NaN. */
+  float *uv;     /* nt*3*2 texture coordinates of the diffuse texture (u right, v up: v = 0
+                    is the image's bottom row, as assimp and OpenGL) */
+  float *rgb;    /* nt*3*3 vertex colours in [0, 1] */
+  char *texture; /* the diffuse texture (aiTextureType_DIFFUSE) of the first material that
+                    has one, resolved against the mesh file's folder; `uv` is set only on
+                    the triangles of materials using this file. Not checked to exist. */
 } mgs_mesh;
 
 mgs_mesh *mgs_mesh_create(size_t nv, size_t nt);
 void mgs_mesh_destroy(mgs_mesh *m);
+/* A deep copy, appearance included; NULL when out of memory. */
+mgs_mesh *mgs_mesh_clone(const mgs_mesh *m);
 /* Fails (MGS_ERR_FORMAT, naming the file) on an empty mesh, indices out of range or
  * non-finite vertices. Vertices at identical positions are welded (OBJ splits them by
  * normal), so boundary counts see the real topology; vertex order is not preserved.

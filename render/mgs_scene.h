@@ -1,7 +1,8 @@
 /* Ground-truth scene maker: renders a NeRF-synthetic dataset of a triangle mesh with
  * Embree (C API, called directly). Owns: the camera rig (Fibonacci spiral on a sphere or
- * upper hemisphere, jittered by the seed), the shading (diffuse albedo with procedural
- * 3D texture, optional Blinn-Phong specular, headlight + fixed directional light), the
+ * upper hemisphere, jittered by the seed), the shading (diffuse albedo: the mesh's own
+ * diffuse texture through its UVs, else its vertex colours, else a procedural 3D texture;
+ * optional Blinn-Phong specular, headlight + fixed directional light), the
  * antialiased RGBA images (stratified supersampling, alpha = coverage), and the dataset
  * folder (train/, test/, transforms_{train,test}.json, gt_mesh.ply, points3d.ply,
  * scene.json), written into a staging folder and renamed into place at the end.
@@ -18,6 +19,7 @@
 #include "core/mgs_camera.h"
 #include "core/mgs_image.h"
 #include "core/mgs_mesh.h"
+#include "core/mgs_texture.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -44,6 +46,8 @@ typedef struct mgs_scene_options {
   int allow_open;          /* render meshes with boundary / non-manifold edges */
   const char *mesh_name;   /* named in error messages and scene.json (may be NULL) */
   int quiet;               /* no progress bar */
+  int procedural_texture;  /* 1: the procedural texture even where the mesh has its own
+                              texture or colours (a texture bad for SIFT, say) */
   int city_size;           /* > 0: the mesh is mgs_assets_city(city_size): kept in world
                               units (not normalized) and seen by the city's camera rig
                               (mgs_scene_city_cameras) instead of the sphere around it */
@@ -58,9 +62,15 @@ typedef struct mgs_scene_stats {
   double render_seconds;  /* ray casting + shading only */
   double total_seconds;   /* everything, files included */
   size_t triangles;
+  const char *appearance; /* "texture", "vertex colors" or "procedural" (static string) */
 } mgs_scene_stats;
 
 /* Renders the dataset of `mesh` (not modified: a normalized copy is used) into out_dir.
+ * Appearance: the mesh's diffuse texture (mesh->texture read with mgs_texture_read, looked
+ * up through mesh->uv) where it has one, else its vertex colours, else the procedural
+ * texture; all procedural with o->procedural_texture. A texture that cannot be read
+ * (missing, corrupt) is not an error: a warning names the mesh, the texture and why, and
+ * the renders fall back (colours, else procedural); scene.json records the appearance used.
  * Errors (nothing left behind on any of them): empty mesh or non-finite vertices
  * (MGS_ERR_FORMAT); boundary or non-manifold edges unless allow_open (MGS_ERR_FORMAT);
  * out_dir holding a dataset without force, or holding anything that is not a dataset
@@ -88,6 +98,11 @@ double mgs_scene_camera_radius(const mgs_scene_options *o, double bound_radius);
 typedef struct mgs_scene_renderer mgs_scene_renderer;
 mgs_status mgs_scene_renderer_create(const mgs_mesh *mesh, mgs_scene_renderer **out, mgs_error *err);
 void mgs_scene_renderer_destroy(mgs_scene_renderer *r);
+/* Shade with the mesh's appearance (the same mesh, or one with the same triangles): its
+ * per-corner UVs with `tex` (borrowed: kept alive by the caller while rendering; NULL: no
+ * texture), its colours. A NULL mesh, or none of these, gives the procedural texture (the
+ * default). Errors: out of memory. */
+mgs_status mgs_scene_renderer_set_appearance(mgs_scene_renderer *r, const mgs_mesh *mesh, const mgs_texture *tex, mgs_error *err);
 /* Renders one view into rgba (cam->width x cam->height, 4 channels, straight alpha).
  * `view_index` only seeds the sub-pixel jitter. Returns the number of rays cast. */
 double mgs_scene_render_view(const mgs_scene_renderer *r, const mgs_camera *cam, const mgs_scene_options *o,

@@ -11,6 +11,7 @@
 #include <unistd.h>
 #include <cjson/cJSON.h>
 #include "render/mgs_scene.h"
+#include "render/scene_internal.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 #include "core/mgs_ply.h"
@@ -160,7 +161,35 @@ static mgs_status write_transforms(const char *path, const char *split, const mg
   return s;
 }
 
-static mgs_status make_init_points(const mgs_mesh *m, const mgs_scene_options *o, mgs_point_cloud *pc, mgs_error *err) {
+/* The appearance used (mgs_scene_render_dataset): the texture if it reads, else the
+   colours, else procedural. A texture that does not read is a warning, not an error: the
+   dataset is still a valid one, only with another look (recorded in scene.json). */
+typedef struct {
+  mgs_texture *tex;
+  const char *name;          /* "texture", "vertex colors", "procedural" */
+  char unusable[MGS_ERROR_MSG_MAX]; /* why the mesh's texture was not used ("" if it was or none) */
+} scene_appearance;
+
+static void choose_appearance(const mgs_mesh *m, const mgs_scene_options *o, scene_appearance *a) {
+  memset(a, 0, sizeof *a);
+  a->name = "procedural";
+  if (o->procedural_texture) return;
+  if (m->texture && m->uv) {
+    mgs_error terr;
+    mgs_error_clear(&terr);
+    if (mgs_texture_read(m->texture, &a->tex, &terr) == MGS_OK) {
+      a->name = "texture";
+      return;
+    }
+    snprintf(a->unusable, sizeof a->unusable, "%s", terr.msg);
+    mgs_warn("scene: %s: cannot use its texture %s (%s); rendering with %s instead (scene.json records it)", mesh_label(o),
+             m->texture, terr.msg, m->rgb ? "its vertex colours" : "the procedural texture");
+  }
+  if (m->rgb) a->name = "vertex colors";
+}
+
+static mgs_status make_init_points(const mgs_mesh *m, const mgs_scene_options *o, const mgs_scene_look *look,
+                                   mgs_point_cloud *pc, mgs_error *err) {
   size_t n = o->init_points ? o->init_points : (o->init == MGS_SCENE_INIT_RANDOM ? 100000 : 10000);
   pc->n = n;
   pc->xyz = malloc(n * 3 * sizeof(float));
@@ -200,8 +229,7 @@ static mgs_status make_init_points(const mgs_mesh *m, const mgs_scene_options *o
     double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
     float p[3];
     for (int k = 0; k < 3; k++) p[k] = (float)(wa * a[k] + wb * b[k] + wc * c[k]);
-    float ts = (float)o->texture_scale, pt[3] = {p[0] * ts, p[1] * ts, p[2] * ts};
-    mgs_scene_albedo(pt, pc->rgb + 3 * i);
+    mgs_scene_look_albedo(look, lo, (float)wb, (float)wc, p, pc->rgb + 3 * i);
     for (int k = 0; k < 3; k++) pc->xyz[3 * i + k] = (float)(p[k] + sigma * mgs_rng_normal(&rng));
   }
   free(cdf);
@@ -209,7 +237,7 @@ static mgs_status make_init_points(const mgs_mesh *m, const mgs_scene_options *o
 }
 
 static mgs_status write_scene_record(const char *path, const mgs_mesh *m, const mgs_scene_options *o, double radius,
-                                     double scale, const double center[3], mgs_error *err) {
+                                     double scale, const double center[3], const scene_appearance *a, mgs_error *err) {
   static const char *init_names[] = {"none", "random", "surface"};
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "generator", "morsegs scene");
@@ -226,6 +254,14 @@ static mgs_status write_scene_record(const char *path, const mgs_mesh *m, const 
   cJSON_AddBoolToObject(root, "hemisphere", o->hemisphere != 0);
   cJSON_AddBoolToObject(root, "specular", o->specular != 0);
   cJSON_AddNumberToObject(root, "texture_scale", o->texture_scale);
+  cJSON_AddStringToObject(root, "appearance", a->name);
+  if (a->tex) {
+    cJSON_AddStringToObject(root, "texture", m->texture);
+    int wh[2] = {mgs_texture_width(a->tex), mgs_texture_height(a->tex)};
+    cJSON_AddItemToObject(root, "texture_size", cJSON_CreateIntArray(wh, 2));
+  } else if (a->unusable[0]) {
+    cJSON_AddStringToObject(root, "texture_unusable", a->unusable);
+  }
   cJSON_AddNumberToObject(root, "spp", o->spp);
   cJSON_AddStringToObject(root, "background", o->white_background ? "white" : "black");
   cJSON_AddStringToObject(root, "init", init_names[o->init]);
@@ -250,12 +286,20 @@ static mgs_status build_into(const char *stage, mgs_mesh *m, const mgs_scene_opt
     if (r > bound) bound = r;
   }
   double radius = mgs_scene_camera_radius(o, bound);
+  scene_appearance look_used;
+  choose_appearance(m, o, &look_used);
+  st->appearance = look_used.name;
+  const mgs_scene_look look = {o->procedural_texture ? NULL : m->uv, look_used.tex, o->procedural_texture ? NULL : m->rgb,
+                               (float)o->texture_scale};
   mgs_scene_renderer *r = NULL;
-  if ((s = mgs_scene_renderer_create(m, &r, err))) return s;
+  if ((s = mgs_scene_renderer_create(m, &r, err))) { mgs_texture_destroy(look_used.tex); return s; }
+  mgs_image *img = NULL;
+  mgs_camera *cams = NULL;
+  if (!o->procedural_texture && (s = mgs_scene_renderer_set_appearance(r, m, look_used.tex, err))) goto done;
   int counts[2] = {o->n_train, o->n_test};
   const char *splits[2] = {"train", "test"};
-  mgs_camera *cams = malloc((size_t)(counts[0] > counts[1] ? counts[0] : counts[1]) * sizeof(mgs_camera));
-  mgs_image *img = mgs_image_create(o->width, o->height, 4);
+  cams = malloc((size_t)(counts[0] > counts[1] ? counts[0] : counts[1]) * sizeof(mgs_camera));
+  img = mgs_image_create(o->width, o->height, 4);
   if (!cams || !img) { s = mgs_error_set(err, MGS_ERR_NOMEM, "scene: out of memory"); goto done; }
   mgs_progress *bar = o->quiet ? NULL : mgs_progress_create("scene", (size_t)(counts[0] + counts[1]));
   size_t done_views = 0;
@@ -294,7 +338,7 @@ static mgs_status build_into(const char *stage, mgs_mesh *m, const mgs_scene_opt
   }
   if (s == MGS_OK && o->init != MGS_SCENE_INIT_NONE) {
     mgs_point_cloud pc = {0, NULL, NULL, NULL};
-    s = make_init_points(m, o, &pc, err);
+    s = make_init_points(m, o, &look, &pc, err);
     if (s == MGS_OK) {
       char *p = mgs_path_join(stage, "points3d.ply");
       s = p ? mgs_ply_write_points(p, &pc, err) : mgs_error_set(err, MGS_ERR_NOMEM, "scene: out of memory");
@@ -305,13 +349,14 @@ static mgs_status build_into(const char *stage, mgs_mesh *m, const mgs_scene_opt
   }
   if (s == MGS_OK) {
     char *p = mgs_path_join(stage, "scene.json");
-    s = p ? write_scene_record(p, m, o, radius, scale, center, err) : mgs_error_set(err, MGS_ERR_NOMEM, "scene: out of memory");
+    s = p ? write_scene_record(p, m, o, radius, scale, center, &look_used, err) : mgs_error_set(err, MGS_ERR_NOMEM, "scene: out of memory");
     free(p);
   }
 done:
   mgs_image_destroy(img);
   free(cams);
   mgs_scene_renderer_destroy(r);
+  mgs_texture_destroy(look_used.tex);
   return s;
 }
 
@@ -344,10 +389,8 @@ static mgs_status render_dataset(const mgs_mesh *mesh, const mgs_scene_options *
   int state;
   if ((s = check_out_dir(out_dir, o->force, &state, err))) return s;
 
-  mgs_mesh *m = mgs_mesh_create(mesh->nv, mesh->nt);
+  mgs_mesh *m = mgs_mesh_clone(mesh);
   if (!m) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory copying the mesh", mesh_label(o));
-  memcpy(m->v, mesh->v, mesh->nv * 3 * sizeof(float));
-  memcpy(m->t, mesh->t, mesh->nt * 3 * sizeof(uint32_t));
   double center[3] = {0, 0, 0};
   /* the city keeps its world units (its blocks' size must not depend on its size) */
   double scale = o->city_size > 0 ? 1.0 : mgs_mesh_normalize(m, 2.0, center);

@@ -16,6 +16,8 @@ struct mgs_scene_renderer {
   uint32_t *tri;    /* nt*3 indices (copy) */
   float *vnormal;   /* nv*3 area-weighted vertex normals (unit) */
   uint8_t *smooth;  /* per triangle: 1 = interpolate vertex normals, 0 = flat (a crease) */
+  float *uv, *rgb;  /* copies of the mesh's appearance (mgs_scene_renderer_set_appearance) */
+  const mgs_texture *tex; /* borrowed */
 };
 
 /* Smooth shading hides the facets of polygonized surfaces; triangles at a crease (box
@@ -66,7 +68,27 @@ void mgs_scene_renderer_destroy(mgs_scene_renderer *r) {
   free(r->tri);
   free(r->vnormal);
   free(r->smooth);
+  free(r->uv);
+  free(r->rgb);
   free(r);
+}
+
+mgs_status mgs_scene_renderer_set_appearance(mgs_scene_renderer *r, const mgs_mesh *mesh, const mgs_texture *tex, mgs_error *err) {
+  free(r->uv);
+  free(r->rgb);
+  r->uv = r->rgb = NULL;
+  r->tex = NULL;
+  if (!mesh) return MGS_OK;
+  if (mesh->uv && tex) {
+    if (!(r->uv = malloc(sizeof(float) * 6 * mesh->nt))) return mgs_error_set(err, MGS_ERR_NOMEM, "scene renderer: out of memory for texture coordinates");
+    memcpy(r->uv, mesh->uv, sizeof(float) * 6 * mesh->nt);
+    r->tex = tex;
+  }
+  if (mesh->rgb) {
+    if (!(r->rgb = malloc(sizeof(float) * 9 * mesh->nt))) return mgs_error_set(err, MGS_ERR_NOMEM, "scene renderer: out of memory for vertex colours");
+    memcpy(r->rgb, mesh->rgb, sizeof(float) * 9 * mesh->nt);
+  }
+  return MGS_OK;
 }
 
 mgs_status mgs_scene_renderer_create(const mgs_mesh *mesh, mgs_scene_renderer **out, mgs_error *err) {
@@ -191,6 +213,7 @@ static void render_rows(void *vctx, size_t y0, size_t y1) {
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   struct RTCRayHit rays[MAX_SAMPLES];
   const uint32_t seed_mix = (uint32_t)job->o->seed * 0x9e3779b1u ^ (uint32_t)(job->o->seed >> 32);
+  const mgs_scene_look look = {job->r->uv, job->r->tex, job->r->rgb, (float)job->o->texture_scale};
   for (size_t y = y0; y < y1; y++) {
     for (int x = 0; x < cam->width; x++) {
       /* One hash per pixel, then a cheap LCG for the sample jitter: deterministic and
@@ -234,9 +257,9 @@ static void render_rows(void *vctx, size_t y0, size_t y1) {
         float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (!(nl > 0)) { n[0] = -d[0]; n[1] = -d[1]; n[2] = -d[2]; nl = 1; back = 1.0f; }
         n[0] *= back / nl; n[1] *= back / nl; n[2] *= back / nl;
-        float view[3] = {-d[0], -d[1], -d[2]}, rgb[3];
-        float ts = (float)job->o->texture_scale, pt[3] = {p[0] * ts, p[1] * ts, p[2] * ts}; /* only the albedo reads p */
-        mgs_scene_shade(pt, n, view, job->o->specular, rgb);
+        float view[3] = {-d[0], -d[1], -d[2]}, rgb[3], albedo[3];
+        mgs_scene_look_albedo(&look, rh->hit.primID, rh->hit.u, rh->hit.v, p, albedo);
+        mgs_scene_shade_albedo(albedo, n, view, job->o->specular, rgb);
         sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
         hits++;
       }

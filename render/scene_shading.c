@@ -1,5 +1,6 @@
-/* Shading of the ground-truth renders: a diffuse albedo with procedural 3D texture
- * (value-noise fBm plus soft stripes, so photometric fitting has detail to learn), lit
+/* Shading of the ground-truth renders: a diffuse albedo (the mesh's own texture or vertex
+ * colours, else a procedural 3D texture: value-noise fBm plus soft stripes, so photometric
+ * fitting has detail to learn), lit
  * by a headlight and a fixed directional light, with an optional Blinn-Phong highlight
  * (a view-dependent term, so the SH degree of a fit matters). No shadows: every lit
  * quantity is local, which keeps the renders cheap and exactly reproducible. */
@@ -60,11 +61,35 @@ void mgs_scene_albedo(const float p[3], float rgb[3]) {
   }
 }
 
+void mgs_scene_look_albedo(const mgs_scene_look *look, size_t tri, float b1, float b2, const float p[3], float rgb[3]) {
+  const float b0 = 1.0f - b1 - b2;
+  if (look->tex && look->uv) {
+    const float *uv = look->uv + 6 * tri;
+    if (uv[0] == uv[0] && uv[2] == uv[2] && uv[4] == uv[4]) { /* not NaN */
+      mgs_texture_sample(look->tex, b0 * uv[0] + b1 * uv[2] + b2 * uv[4], b0 * uv[1] + b1 * uv[3] + b2 * uv[5], rgb);
+      return;
+    }
+  }
+  if (look->rgb) {
+    const float *c = look->rgb + 9 * tri;
+    if (c[0] == c[0] && c[3] == c[3] && c[6] == c[6]) {
+      for (int k = 0; k < 3; k++) rgb[k] = b0 * c[k] + b1 * c[3 + k] + b2 * c[6 + k];
+      return;
+    }
+  }
+  const float ts = look->texture_scale > 0 ? look->texture_scale : 1.0f, pt[3] = {p[0] * ts, p[1] * ts, p[2] * ts};
+  mgs_scene_albedo(pt, rgb);
+}
+
 void mgs_scene_shade(const float p[3], const float n[3], const float v[3], int specular, float rgb[3]) {
-  static const float sun[3] = {0.40f, 0.30f, 0.866f}; /* unit, from the upper right */
-  const float ambient = 0.18f, k_head = 0.50f, k_sun = 0.55f, k_spec = 0.45f, shininess = 48.0f;
   float albedo[3];
   mgs_scene_albedo(p, albedo);
+  mgs_scene_shade_albedo(albedo, n, v, specular, rgb);
+}
+
+void mgs_scene_shade_albedo(const float albedo[3], const float n[3], const float v[3], int specular, float rgb[3]) {
+  static const float sun[3] = {0.40f, 0.30f, 0.866f}; /* unit, from the upper right */
+  const float ambient = 0.18f, k_head = 0.50f, k_sun = 0.55f, k_spec = 0.45f, shininess = 48.0f;
   float ndv = n[0] * v[0] + n[1] * v[1] + n[2] * v[2];
   float ndl = n[0] * sun[0] + n[1] * sun[1] + n[2] * sun[2];
   float diffuse = ambient + k_head * (ndv > 0 ? ndv : 0) + k_sun * (ndl > 0 ? ndl : 0);

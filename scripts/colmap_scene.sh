@@ -12,7 +12,14 @@
 #                                  and cameras are in the normalized frame, NOT the SfM frame)
 #   OUT/distorted/                 COLMAP's database and the distorted model (OPENCV camera)
 #   OUT/colmap.log                 every COLMAP command's output
-#   OUT/model_stats.txt            `colmap model_analyzer` of OUT/sparse/0
+#   OUT/model_stats.txt            `colmap model_analyzer` of OUT/sparse/0, then the GT alignment
+#   OUT/gt_mesh.ply                OUT/render/gt_mesh.ply moved into COLMAP's frame by the
+#                                  similarity (Umeyama) from the true camera centres to the
+#                                  registered ones (scripts/colmap_align.py), so `morsegs eval`
+#                                  measures Chamfer / F-score in the trained model's frame; not
+#                                  written (a warning, exit 0: the folder still trains) with fewer
+#                                  than 3 registered cameras or an RMS residual above MAX_REL
+#                                  (default 0.02) of the camera radius
 #
 # The loader holds out every 8th image (sorted by name) as the test split.
 #
@@ -34,13 +41,16 @@
 #             PLANAR_OR_PANORAMIC, and its two faces share no features).
 #   THREADS   COLMAP threads [1]
 #   SIFT_ARGS extra feature_extractor flags [none]
+#   MAX_REL   the GT alignment's largest accepted RMS camera-centre residual, as a fraction
+#             of the camera radius [0.02]
 #   MIN_TRACK_LEN  when set, `colmap point_filtering --min_track_len N` on the final model
 #             [unset: COLMAP's output as convert.py leaves it]. Two-view points include a few
 #             far outliers (on the hinge, 7 of 1840 points lie 2-20x the object's radius
 #             away), which stretch the points' bounding box; see docs/notes/colmap.md
 #
-# Needs the Debian package `colmap` (3.8 in bookworm; CPU only here: *.use_gpu 0) and
-# oiiotool (openimageio-tools). Not part of the test suite.
+# Needs the Debian package `colmap` (3.8 in bookworm; CPU only here: *.use_gpu 0),
+# oiiotool (openimageio-tools) and python3-numpy (the alignment). Not part of the test suite
+# (the alignment's math is: tests/scene/test_colmap_align.py).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 die() { echo "colmap_scene.sh: $*" >&2; exit 1; }
@@ -122,3 +132,8 @@ fi
 colmap model_analyzer --path "$out/sparse/0" > "$out/model_stats.txt" 2>&1
 echo "colmap_scene.sh: $out: $(sed -n 's/.*\(Registered images: *[0-9]*\).*/\1/p' "$out/model_stats.txt") of $VIEWS," \
   "$(sed -n 's/.*\(Points: *[0-9]*\).*/\1/p' "$out/model_stats.txt"), $(sed -n 's/.*\(Mean reprojection error: *[0-9.]*px\).*/\1/p' "$out/model_stats.txt")"
+# 4. The GT mesh in COLMAP's frame (the loader reports OUT/gt_mesh.ply as the dataset's mesh).
+if ! MAX_REL=${MAX_REL:-0.02} /usr/bin/python3 "$here/scripts/colmap_align.py" "$out"; then
+  echo "colmap_scene.sh: $out: no gt_mesh.ply (see the GT alignment lines above and in $out/model_stats.txt):" \
+    "training and image metrics work, geometry metrics need a mesh (eval --mesh)" >&2
+fi

@@ -519,8 +519,16 @@ static void test_colmap(void) {
   if (ds) {
     CHECK(ds->n_views[MGS_SPLIT_TRAIN] == 1 && ds->init_points == NULL);
     if (ds->n_views[MGS_SPLIT_TRAIN] == 1) check_project(&ds->views[MGS_SPLIT_TRAIN][0].cam, 0.5, 0.25, 0, 10, 5);
+    CHECK(ds->mesh_path == NULL);
     mgs_dataset_destroy(ds);
   }
+  /* a GT mesh beside sparse/ (scripts/colmap_scene.sh writes it in the SfM frame) is the
+     dataset's, for eval's geometry metrics */
+  io_write_text(join(d, "gt_mesh.ply"), "ply\n");
+  ds = NULL;
+  CHECK_OK(mgs_dataset_load(d, &o, &ds, &err), &err);
+  if (ds) CHECK(ds->mesh_path && strstr(ds->mesh_path, "io_colmap_cross/gt_mesh.ply"));
+  mgs_dataset_destroy(ds);
 }
 
 static void test_colmap_bad(void) {

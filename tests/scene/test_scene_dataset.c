@@ -298,7 +298,7 @@ static void test_bad_meshes(void) {
   small_options(&o);
   o.mesh_name = "bad.obj";
   const char *out = path2(root, "bad_out");
-  mgs_mesh empty = {0, 0, NULL, NULL};
+  mgs_mesh empty = {.nv = 0, .nt = 0, .v = NULL, .t = NULL};
   CHECK(mgs_scene_render_dataset(&empty, &o, out, &err) == MGS_ERR_FORMAT);
   CHECK(strstr(err.msg, "bad.obj") && strstr(err.msg, "empty"));
   CHECK(!mgs_path_exists(out));
@@ -306,7 +306,7 @@ static void test_bad_meshes(void) {
   /* One triangle: open. */
   float tri_v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0.2f};
   uint32_t tri_t[3] = {0, 1, 2};
-  mgs_mesh tri = {3, 1, tri_v, tri_t};
+  mgs_mesh tri = {.nv = 3, .nt = 1, .v = tri_v, .t = tri_t};
   CHECK(mgs_scene_render_dataset(&tri, &o, out, &err) == MGS_ERR_FORMAT);
   CHECK(strstr(err.msg, "bad.obj") && strstr(err.msg, "--allow-open"));
   CHECK(!mgs_path_exists(out));
@@ -322,20 +322,20 @@ static void test_bad_meshes(void) {
   float tv[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.3f, -0.8f, -0.6f};
   uint32_t tt[24] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, /* tet 0123 */
                      0, 1, 4, 0, 4, 2, 1, 2, 4, 0, 2, 1}; /* not a valid second solid: edge 0-1 reused */
-  mgs_mesh nm = {5, 8, tv, tt};
+  mgs_mesh nm = {.nv = 5, .nt = 8, .v = tv, .t = tt};
   const char *out2 = path2(root, "bad_out2");
   CHECK(mgs_scene_render_dataset(&nm, &o, out2, &err) == MGS_ERR_FORMAT);
   CHECK(strstr(err.msg, "non-manifold") != NULL);
   CHECK(!mgs_path_exists(out2));
-  mgs_mesh tet = {4, 4, tv, tt};
+  mgs_mesh tet = {.nv = 4, .nt = 4, .v = tv, .t = tt};
   CHECK(mgs_scene_check_mesh(&tet, &o, &err) == MGS_OK);
 
   float nanv[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, NAN};
-  mgs_mesh nanm = {4, 4, nanv, tt};
+  mgs_mesh nanm = {.nv = 4, .nt = 4, .v = nanv, .t = tt};
   CHECK(mgs_scene_render_dataset(&nanm, &o, out2, &err) == MGS_ERR_FORMAT);
   CHECK(strstr(err.msg, "non-finite") != NULL);
   uint32_t oob[12] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 9};
-  mgs_mesh oobm = {4, 4, tv, oob};
+  mgs_mesh oobm = {.nv = 4, .nt = 4, .v = tv, .t = oob};
   CHECK(mgs_scene_render_dataset(&oobm, &o, out2, &err) == MGS_ERR_FORMAT);
   CHECK(!mgs_path_exists(out2));
 

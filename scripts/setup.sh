@@ -11,7 +11,7 @@ PKGS=(
   python3-dev python3-venv python3-setuptools python3-wheel
   libopencv-core-dev python3-pot python3-pil
   libopenmpi-dev openmpi-bin
-  netgen-doc gmsh-doc python3-open3d
+  netgen-doc gmsh-doc assimp-testmodels python3-open3d
   libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
   chromium blender
 )

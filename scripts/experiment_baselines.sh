@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Issue 27's run: MorseGS against the proposal's own baselines and on top of them, not in the
-# test command. The three built-in scenes and two meshes nobody here made (netgen-doc's
-# hinge.stl, gmsh-doc's lever.stl.gz) at RES² (200), the reference schedule compressed to
+# test command. The three built-in scenes, four meshes nobody here made (netgen-doc's
+# hinge.stl and part1.stl, gmsh-doc's lever.stl.gz, assimp-testmodels' textured duck.dae)
+# at RES² (200), and a real COLMAP folder (colmap-hinge: COLMAP's SfM on 300² renders of
+# the hinge, `scripts/colmap_scene.sh` with MIN_TRACK_LEN=3; GT mesh moved into its frame), the reference schedule compressed to
 # ITERS (7500) with --schedule-scale SCALE (0.25), SEEDS (5) seeds, variants:
 #   baseline, morse-r, morse-full                      3DGS and MorseGS on it
 #   2dgs, 2dgs-morse-r (measured against 2dgs)         MorseGS' loss on 2DGS
@@ -34,18 +36,26 @@ M=${MORSEGS:-build/apps/morsegs}
 [ -x "$M" ] || { echo "experiment_baselines.sh: $M not found: run scripts/build.sh build first" >&2; exit 2; }
 hinge=/usr/share/doc/netgen/examples/hinge.stl
 lever=/usr/share/doc/gmsh-doc/converters/stl_to_cartesian/lever.stl.gz
+part1=/usr/share/doc/netgen/examples/part1.stl
+duck=/usr/share/assimp/models/Collada/duck.dae
 RES=${RES:-200}; ITERS=${ITERS:-7500}; SCALE=${SCALE:-0.25}; SEEDS=${SEEDS:-5}; EVALS=${EVALS:-2}
-SCENES=${SCENES:-sphere genus2 thin hinge lever}
+SCENES=${SCENES:-sphere genus2 thin hinge lever duck part1 colmap-hinge}
 S="--views ${VIEWS:-60} --test-views ${TEST_VIEWS:-20} --width $RES --height $RES"
 mkdir -p "$dir/scenes"
 data=()
 for b in $SCENES; do
-  if [ ! -f "$dir/scenes/$b/scene.json" ]; then
+  if [ ! -f "$dir/scenes/$b/scene.json" ] && [ ! -d "$dir/scenes/$b/sparse/0" ]; then
     case $b in
       hinge) [ -f "$hinge" ] || { echo "experiment_baselines.sh: $hinge missing: apt-get install netgen-doc" >&2; exit 2; }
              "$M" scene "$hinge" -o "$dir/scenes/hinge" $S -q ;;
       lever) [ -f "$lever" ] || { echo "experiment_baselines.sh: $lever missing: apt-get install gmsh-doc" >&2; exit 2; }
              zcat "$lever" > "$dir/scenes/lever.stl" && "$M" scene "$dir/scenes/lever.stl" -o "$dir/scenes/lever" $S -q ;;
+      part1) [ -f "$part1" ] || { echo "experiment_baselines.sh: $part1 missing: apt-get install netgen-doc" >&2; exit 2; }
+             "$M" scene "$part1" -o "$dir/scenes/part1" $S -q ;;
+      duck) [ -f "$duck" ] || { echo "experiment_baselines.sh: $duck missing: apt-get install assimp-testmodels" >&2; exit 2; }
+            "$M" scene "$duck" -o "$dir/scenes/duck" $S -q ;;
+      colmap-hinge) command -v colmap > /dev/null || { echo "experiment_baselines.sh: colmap missing: apt-get install colmap" >&2; exit 2; }
+            MORSEGS="$M" MIN_TRACK_LEN=3 scripts/colmap_scene.sh "$hinge" "$dir/scenes/colmap-hinge" ;;
       *) "$M" scene --builtin "$b" -o "$dir/scenes/$b" $S -q ;;
     esac
   fi

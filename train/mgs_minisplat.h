@@ -54,7 +54,11 @@ mgs_status mgs_strategy_minisplat_create(const mgs_minisplat_options *o, mgs_str
 /* Per pixel of one rendered view (r: a forward of model g at cam, then its blend
  * statistics): the point of the pixel ray closest to its max-weight Gaussian in that
  * Gaussian's metric |S^-1 R^T (x - mu)| (xyz: 3 floats per pixel, NaN where no Gaussian
- * or behind the camera). */
+ * or behind the camera). A 2DGS model's surfel has no such metric (its third scale is ~0):
+ * the ray's intersection with the surfel's plane, the point the 2DGS rasterizer evaluates,
+ * where it lies on the splat (alpha >= 1/255 there); else, where the rasterizer's
+ * screen-space filter gave the weight, the ray's point at the centre's camera depth (the
+ * rasterizer's depth there). */
 mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, float *xyz,
                                     mgs_error *err);
 /* k distinct indices out of n drawn without replacement with probability proportional to

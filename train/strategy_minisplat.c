@@ -196,12 +196,17 @@ mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const
 /* ---- model replacement ---- */
 
 /* All Gaussians replaced by the reference initialisation at xyz/rgb (n points); Adam as
- * a new optimizer (zero moments, step counts 0), as the authors' training_setup. */
+ * a new optimizer (zero moments, step counts 0), as the authors' training_setup. A 2DGS
+ * model gets 2DGS's init (--model 2dgs from points): the same two 3-NN scales, opacity and
+ * colour, rotations uniform in [0,1)^4 (mgs_init_to_surfels), from a stream seeded by the
+ * strategy's generator (so a resumed run draws the same). */
 static mgs_status replace_model(ms *m, mgs_gaussians *g, mgs_adam *a, const float *xyz, const float *rgb, size_t n,
-                                mgs_error *err) {
+                                mgs_rng *rng, mgs_error *err) {
   mgs_gaussians *ng = NULL;
   mgs_status st = mgs_init_from_points(xyz, rgb, n, g->sh_degree, &ng, err);
   if (st) return st;
+  if (g->kind == MGS_MODEL_2DGS)
+    mgs_init_to_surfels(ng, (uint64_t)mgs_rng_u32(rng) << 32 | mgs_rng_u32(rng));
   uint8_t *keep = calloc(g->n ? g->n : 1, 1);
   if (!keep) { mgs_gaussians_destroy(ng); return mgs_error_set(err, MGS_ERR_NOMEM, "mini-splatting: out of memory"); }
   mgs_model_compact(g, a, keep);
@@ -292,7 +297,7 @@ static mgs_status reinit(ms *m, mgs_strategy_step *s, mgs_error *err) {
       memcpy(rgb + 3 * n, gt + 3 * (size_t)idx[j], 3 * sizeof(float));
     }
   }
-  if (st == MGS_OK && n > 0) st = replace_model(m, g, s->adam, xyz, rgb, n, err);
+  if (st == MGS_OK && n > 0) st = replace_model(m, g, s->adam, xyz, rgb, n, s->rng, err);
 done:
   free(pts); free(w); free(idx); free(xyz); free(rgb);
   return st;
@@ -356,7 +361,7 @@ static mgs_status reset_in_place(ms *m, mgs_strategy_step *s, mgs_error *err) {
   if (!xyz || !rgb) { free(xyz); free(rgb); return mgs_error_set(err, MGS_ERR_NOMEM, "mini-splatting: out of memory"); }
   memcpy(xyz, g->mean, n * 3 * sizeof(float));
   for (size_t i = 0; i < 3 * n; i++) rgb[i] = 0.5f + MGS_SH_C0 * g->sh_dc[i]; /* SH2RGB, unclamped */
-  mgs_status st = replace_model(m, g, s->adam, xyz, rgb, n, err);
+  mgs_status st = replace_model(m, g, s->adam, xyz, rgb, n, s->rng, err);
   free(xyz); free(rgb);
   return st;
 }

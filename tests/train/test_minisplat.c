@@ -11,7 +11,8 @@
  *    successive sampling (numpy's choice(p, replace=False)), never draws a zero weight;
  *    the 1 % cumulative-importance cut; the simplification count;
  *  - in the trainer: counts, opacities, SH degree and position lr around each milestone,
- *    and a checkpoint/resume that ends bit for bit as the uninterrupted run. */
+ *    and a checkpoint/resume that ends bit for bit as the uninterrupted run; on a 2DGS model
+ *    the replacements are surfels of 2DGS's init, and resume is bit for bit too. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -459,8 +460,11 @@ static void small_options(mgs_train_options *o, mgs_minisplat_options *m, int de
   m->lr_restart = 20;
 }
 
+static int as_surfels; /* make() builds a 2DGS model (the 2DGS init's rotations and third scale) */
+
 static mgs_trainer *make(const mgs_train_options *o, const mgs_minisplat_options *m) {
   mgs_gaussians *g = synth_model(200, 9);
+  if (as_surfels) mgs_init_to_surfels(g, 3);
   mgs_strategy *s = NULL;
   mgs_trainer *t = NULL;
   mgs_error err;
@@ -536,6 +540,56 @@ static void in_trainer(void) {
   mgs_trainer_destroy(t);
 }
 
+/* Every surfel as 2DGS's init makes it from a point: kind kept, the two disc scales equal
+ * (3-NN), the third the surfel constant, opacity 0.1, rotation components in [0, 1) (the
+ * authors' torch.rand) and not all the identity. */
+static int surfel_init(const mgs_gaussians *g) {
+  if (g->kind != MGS_MODEL_2DGS || !all_opacity(g, 0.1f)) return 0;
+  size_t identity = 0;
+  for (size_t i = 0; i < g->n; i++) {
+    if (g->log_scale[3 * i] != g->log_scale[3 * i + 1] || g->log_scale[3 * i + 2] != MGS_SURFEL_LOG_SCALE2) return 0;
+    for (int k = 0; k < 4; k++) if (!(g->rot[4 * i + k] >= 0 && g->rot[4 * i + k] < 1)) return 0;
+    identity += g->rot[4 * i] == 1 && g->rot[4 * i + 1] == 0;
+  }
+  return identity < g->n / 10 + 1;
+}
+
+/* --model 2dgs: the same milestones on surfels; replacements are surfels of 2DGS's init,
+ * Adam restarts (step counts 0) */
+static void in_trainer_2dgs(void) {
+  mgs_train_options o;
+  mgs_minisplat_options m;
+  small_options(&o, &m, 0);
+  m.adc.min_opacity = 0.05f; /* the 2DGS default (train/config.c) */
+  mgs_error err;
+  as_surfels = 1;
+  mgs_trainer *t = make(&o, &m);
+  CHECK_OK(mgs_trainer_run_until(t, 29, &err), &err);
+  size_t n29 = mgs_trainer_model(t)->n, nv = ds->n_views[MGS_SPLIT_TRAIN];
+  CHECK_OK(mgs_trainer_step(t, &err), &err); /* 30: reinitialisation from the surfels' ray points */
+  const mgs_gaussians *g = mgs_trainer_model(t);
+  CHECK_MSG(g->n == nv * (n29 / nv), "%zu surfels after reinit from %zu", g->n, n29);
+  CHECK_MSG(surfel_init(g), "the reinitialised model is not 2DGS's init");
+  CHECK_OK(mgs_trainer_run_until(t, 59, &err), &err);
+  size_t n59 = mgs_trainer_model(t)->n;
+  CHECK_OK(mgs_trainer_step(t, &err), &err); /* 60: simplification, every kept surfel re-initialised */
+  g = mgs_trainer_model(t);
+  CHECK_MSG(g->n > 0 && g->n <= n59 / 2, "%zu surfels after simplification from %zu", g->n, n59);
+  CHECK_MSG(surfel_init(g), "the simplified model is not 2DGS's init");
+  CHECK_OK(mgs_trainer_run_until(t, 79, &err), &err);
+  size_t n79 = mgs_trainer_model(t)->n;
+  CHECK_OK(mgs_trainer_step(t, &err), &err); /* 80: the 1 % cut */
+  CHECK(mgs_trainer_model(t)->n < n79 && mgs_trainer_model(t)->kind == MGS_MODEL_2DGS);
+  CHECK_OK(mgs_trainer_run(t, &err), &err);
+  double psnr, ssim;
+  CHECK_OK(mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &psnr, &ssim, &err), &err);
+  fprintf(stderr, "mini-splatting on surfels: %zu -> %zu (reinit) ... %zu (before simplifying) ... %zu surfels, test "
+          "PSNR %.2f\n", n29, nv * (n29 / nv), n59, mgs_trainer_model(t)->n, psnr);
+  CHECK(isfinite(psnr) && psnr > 12);
+  mgs_trainer_destroy(t);
+  as_surfels = 0;
+}
+
 static int same_model(const mgs_gaussians *a, const mgs_gaussians *b) {
   if (a->n != b->n) { fprintf(stderr, "counts differ: %zu vs %zu\n", a->n, b->n); return 0; }
   for (int k = 0; k < MGS_PARAM_COUNT; k++) {
@@ -549,7 +603,7 @@ static int same_model(const mgs_gaussians *a, const mgs_gaussians *b) {
   return 1;
 }
 
-static void resume_identity(void) {
+static void resume_identity_case(void) {
   mgs_train_options o;
   mgs_minisplat_options m;
   small_options(&o, &m, 0);
@@ -578,6 +632,14 @@ static void resume_identity(void) {
   remove(ck);
 }
 
+/* 3DGS, then surfels (whose replacements draw their rotations from the run's generator) */
+static void resume_identity(void) {
+  resume_identity_case();
+  as_surfels = 1;
+  resume_identity_case();
+  as_surfels = 0;
+}
+
 int main(void) {
   mgs_parallel_set_threads(2);
   RUN(blend_consistency);
@@ -591,6 +653,7 @@ int main(void) {
   ds = synth_dataset(gt, 8, 4, 48, 48);
   mgs_gaussians_destroy(gt);
   RUN(in_trainer);
+  RUN(in_trainer_2dgs);
   RUN(resume_identity);
   mgs_dataset_destroy(ds);
   return mgs_test_finish();

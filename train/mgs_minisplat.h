@@ -20,6 +20,9 @@
  *                       colour (3-NN scale, opacity 0.1, identity rotation, no higher SH),
  *                       Adam reset; the SH degree is held at 0 until then and the position
  *                       learning rate restarts at step `lr_restart` there
+ * On a 2DGS model (surfels) the statistics are the surfel rasterizer's, the ray point is on
+ * the max-weight surfel's plane (mgs_minisplat_ray_points) and every replacement is 2DGS's
+ * init from points (random rotations in [0,1)^4, two 3-NN disc scales).
  * No opacity reset (ADC's reset period only gates the screen/world size pruning).
  * The milestones are those of the config after --schedule-scale (train/config.c). */
 #ifndef MGS_MINISPLAT_H

@@ -554,8 +554,8 @@ static int surfel_init(const mgs_gaussians *g) {
   return identity < g->n / 10 + 1;
 }
 
-/* --model 2dgs: the same milestones on surfels; replacements are surfels of 2DGS's init,
- * Adam restarts (step counts 0) */
+/* --model 2dgs: the same milestones on surfels, for both variants; replacements are
+ * surfels of 2DGS's init */
 static void in_trainer_2dgs(void) {
   mgs_train_options o;
   mgs_minisplat_options m;
@@ -585,6 +585,21 @@ static void in_trainer_2dgs(void) {
   CHECK_OK(mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &psnr, &ssim, &err), &err);
   fprintf(stderr, "mini-splatting on surfels: %zu -> %zu (reinit) ... %zu (before simplifying) ... %zu surfels, test "
           "PSNR %.2f\n", n29, nv * (n29 / nv), n59, mgs_trainer_model(t)->n, psnr);
+  CHECK(isfinite(psnr) && psnr > 12);
+  mgs_trainer_destroy(t);
+  /* -D: reinitialisation with replacement, the reset of every surfel at densify_until */
+  small_options(&o, &m, 1);
+  m.adc.min_opacity = 0.05f;
+  t = make(&o, &m);
+  CHECK_OK(mgs_trainer_run_until(t, 30, &err), &err);
+  CHECK(surfel_init(mgs_trainer_model(t)));
+  CHECK_OK(mgs_trainer_run_until(t, 59, &err), &err);
+  size_t d59 = mgs_trainer_model(t)->n;
+  CHECK_OK(mgs_trainer_step(t, &err), &err);
+  CHECK(mgs_trainer_model(t)->n == d59 && surfel_init(mgs_trainer_model(t)));
+  CHECK_OK(mgs_trainer_run(t, &err), &err);
+  CHECK_OK(mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &psnr, &ssim, &err), &err);
+  fprintf(stderr, "mini-splatting-d on surfels: %zu surfels, test PSNR %.2f\n", mgs_trainer_model(t)->n, psnr);
   CHECK(isfinite(psnr) && psnr > 12);
   mgs_trainer_destroy(t);
   as_surfels = 0;

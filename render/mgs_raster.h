@@ -165,6 +165,7 @@ mgs_status mgs_raster_map_grads(mgs_raster *r, mgs_raster_map_grad *out, mgs_err
 /* Blending statistics of the last forward on this context (what Mini-Splatting reads), by
  * one more pass over its tile lists with its alpha decisions (a forward not followed by
  * this call costs nothing more); w = alpha*T is a Gaussian's blending weight in a pixel.
+ * Both models: a surfel forward's pass takes its rules (ray-splat rho, depth < 0.2 skip).
  * The forward's model must be unchanged; valid until the next forward on this context. */
 typedef struct mgs_raster_blend {
   int width, height;

@@ -262,6 +262,92 @@ void mgs_raster2d_geometry(mgs_raster *r) {
   r->s_geo = 1;
 }
 
+/* The blending statistics (raster_blend.c) of a surfel forward: its compositing again,
+ * with its alpha decisions (row masks, rho = min(rho3, rho2), the depth, 1/255 and
+ * T < 1e-4 rules, the row and tile early stops), keeping per pixel the first surfel with
+ * the largest w = alpha T and the final T, per intersection the tile's sum of w. Run only
+ * when asked: the training forward is untouched. */
+typedef struct blend_ctx {
+  mgs_raster *r;
+  int32_t *max_index;
+  float *final_T, *slot_w;
+} blend_ctx;
+
+static void blend_tile(const blend_ctx *bc, size_t tile) {
+  mgs_raster *r = bc->r;
+  const int W = r->width, H = r->height;
+  int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
+  int x0 = tx * MGS_TILE_SIZE, y0 = ty * MGS_TILE_SIZE;
+  int nrows = H - y0 < MGS_TILE_SIZE ? H - y0 : MGS_TILE_SIZE;
+  int ncols = W - x0 < MGS_TILE_SIZE ? W - x0 : MGS_TILE_SIZE;
+  v16f T[MGS_TILE_SIZE], WMAX[MGS_TILE_SIZE];
+  v16i IMAX[MGS_TILE_SIZE], DONE[MGS_TILE_SIZE];
+  v16f X;
+  v16i outside;
+  for (int i = 0; i < 16; i++) { X[i] = (float)(x0 + i) + 0.5f; outside[i] = i < ncols ? 0 : -1; }
+  uint32_t rowdone = 0;
+  for (int y = 0; y < MGS_TILE_SIZE; y++) {
+    T[y] = v16f_set1(1.0f);
+    WMAX[y] = v16f_set1(0.0f);
+    IMAX[y] = v16i_set1(-1);
+    DONE[y] = outside;
+  }
+  const v16f one = v16f_set1(1.0f), tmin = v16f_set1(MGS_T_MIN);
+  const mgs_surf2d *surf = mgs_raster2d_surf(r);
+  uint32_t start = r->tile_start[tile], end = r->tile_start[tile + 1], j = start;
+  for (; j < end; j++) {
+    const mgs_surf2d *sf = &surf[r->isect_idx[j]];
+    const v16i gidx = v16i_set1((int32_t)r->isect_idx[j]);
+    uint32_t rows = row_bits(sf, x0, y0, nrows, ncols) & ~rowdone;
+    v16f wsum = v16f_set1(0.0f);
+    if (rows) {
+      isect_cols ic;
+      isect_cols_init(sf, X, &ic);
+      for (; rows; rows &= rows - 1) {
+        int y = __builtin_ctz(rows);
+        isect_row e;
+        isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
+        v16i m = e.m & ~DONE[y];
+        v16f testT = T[y] * (one - e.alpha);
+        v16i nd = m & (testT < tmin);
+        DONE[y] |= nd;
+        if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
+        m &= ~nd;
+        if (!v16i_any(m)) continue;
+        v16f w = v16f_and(m, e.alpha * T[y]);
+        wsum += w;
+        v16i better = m & (w > WMAX[y]);
+        WMAX[y] = v16f_select(better, w, WMAX[y]);
+        IMAX[y] = (better & gidx) | (~better & IMAX[y]);
+        T[y] = v16f_select(m, testT, T[y]);
+      }
+    }
+    bc->slot_w[r->isect_slot[j]] = v16f_sum(wsum);
+    if (((j - start) & 31) == 31) {
+      v16i all = DONE[0];
+      for (int yy = 1; yy < nrows; yy++) all &= DONE[yy];
+      if (!v16i_any(~all)) { j++; break; }
+    }
+  }
+  for (; j < end; j++) bc->slot_w[r->isect_slot[j]] = 0; /* after the tile's early stop */
+  for (int y = 0; y < nrows; y++) {
+    size_t p = (size_t)(y0 + y) * W + x0;
+    for (int x = 0; x < ncols; x++) {
+      bc->final_T[p + x] = T[y][x];
+      bc->max_index[p + x] = IMAX[y][x];
+    }
+  }
+}
+
+static void blend_range(void *ctx, size_t b, size_t e) {
+  for (size_t t = b; t < e; t++) blend_tile(ctx, t);
+}
+
+void mgs_raster2d_blend_tiles(mgs_raster *r, int32_t *max_index, float *final_T, float *slot_w) {
+  blend_ctx bc = {r, max_index, final_T, slot_w};
+  mgs_parallel_for(0, (size_t)r->tiles_x * r->tiles_y, 1, blend_range, &bc);
+}
+
 typedef struct bwd_ctx {
   mgs_raster *r;
   const float *dL_dcolor, *dL_dalpha, *dL_ddepth;

@@ -4,7 +4,9 @@
  * forward not followed by this call costs nothing more. Per pixel the first Gaussian (in
  * depth order) with the largest weight alpha*T, as fatPeter/mini-splatting's rasterizer
  * (`weight_max < alpha*T`); per intersection the sum of its weights over the tile, summed
- * per Gaussian through the forward's gradient-slot order (deterministic, no atomics). */
+ * per Gaussian through the forward's gradient-slot order (deterministic, no atomics).
+ * A surfel forward's pass is the 2DGS compositing's (raster_2dgs_tiles.c); the sums and
+ * counts here are shared. */
 #include <stdlib.h>
 #include <string.h>
 #include "core/mgs_parallel.h"
@@ -129,13 +131,12 @@ static void importance_range(void *ctx, size_t b, size_t e) {
 mgs_status mgs_raster_blend_stats(mgs_raster *r, mgs_raster_blend *out, mgs_error *err) {
   if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_blend.c: NULL argument");
   if (!r->have_forward) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_blend.c: no forward pass on this context");
-  if (r->surfel) /* the pass re-evaluates 3DGS footprints: a surfel forward has none */
-    return mgs_error_set(err, MGS_ERR_UNSUPPORTED, "render/raster_blend.c: blending statistics of a 2DGS forward are not implemented");
   size_t npix = (size_t)r->width * r->height;
   mgs_status st = reserve(r, npix, r->n_isect, r->n, err);
   if (st) return st;
   struct mgs_raster_blend_buf *b = r->blend;
-  mgs_parallel_for(0, (size_t)r->tiles_x * r->tiles_y, 1, blend_range, r);
+  if (r->surfel) mgs_raster2d_blend_tiles(r, b->max_index, b->final_T, b->slot_w); /* raster_2dgs_tiles.c */
+  else mgs_parallel_for(0, (size_t)r->tiles_x * r->tiles_y, 1, blend_range, r);
   mgs_parallel_for(0, r->n, 4096, importance_range, r);
   if (r->n) memset(b->area_max, 0, r->n * sizeof(uint32_t));
   for (size_t p = 0; p < npix; p++)

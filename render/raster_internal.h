@@ -169,6 +169,8 @@ mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, co
 /* per Gaussian [b, e): sum its slots, chain into grad (row 0 = Gaussian gbase) */
 void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *grad, size_t gbase, float *grad_mean2d);
 void mgs_raster2d_free(mgs_raster *r);
+/* the blending statistics' pass over the last surfel forward (raster_blend.c) */
+void mgs_raster2d_blend_tiles(mgs_raster *r, int32_t *max_index, float *final_T, float *slot_w);
 
 /* The forward's per-pixel evaluation, shared so forward and backward agree bit for bit. */
 #define MGS_ALPHA_MIN (1.0f / 255.0f)

@@ -407,9 +407,6 @@ mgs_status mgs_config_validate(const mgs_train_config *c, int ranks, mgs_error *
   }
   /* methods built on 3DGS only: refused on surfels with the reason, never run on data they
      misread */
-  if (c->model == MGS_MODEL_2DGS && (c->strategy == MGS_STRAT_MINISPLAT || c->strategy == MGS_STRAT_MINISPLAT_D))
-    return mgs_error_set(err, MGS_ERR_ARG, "--strategy %s: not with --model 2dgs yet (its blending statistics, area_max "
-                         "and the depth reinitialisation, exist only in the 3DGS rasterizer)", mgs_config_enum_name(c, "strategy"));
   if (c->model == MGS_MODEL_2DGS && c->strategy == MGS_STRAT_SUGAR)
     return mgs_error_set(err, MGS_ERR_ARG, "--strategy sugar: not with --model 2dgs (SuGaR's density and SDF need 3D "
                          "Gaussians; a surfel has no third axis, and 2DGS is itself the surface-aligned model SuGaR "

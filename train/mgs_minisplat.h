@@ -20,6 +20,9 @@
  *                       colour (3-NN scale, opacity 0.1, identity rotation, no higher SH),
  *                       Adam reset; the SH degree is held at 0 until then and the position
  *                       learning rate restarts at step `lr_restart` there
+ * On a 2DGS model (surfels) the statistics are the surfel rasterizer's, the ray point is on
+ * the max-weight surfel's plane (mgs_minisplat_ray_points) and every replacement is 2DGS's
+ * init from points (random rotations in [0,1)^4, two 3-NN disc scales).
  * No opacity reset (ADC's reset period only gates the screen/world size pruning).
  * The milestones are those of the config after --schedule-scale (train/config.c). */
 #ifndef MGS_MINISPLAT_H
@@ -54,7 +57,11 @@ mgs_status mgs_strategy_minisplat_create(const mgs_minisplat_options *o, mgs_str
 /* Per pixel of one rendered view (r: a forward of model g at cam, then its blend
  * statistics): the point of the pixel ray closest to its max-weight Gaussian in that
  * Gaussian's metric |S^-1 R^T (x - mu)| (xyz: 3 floats per pixel, NaN where no Gaussian
- * or behind the camera). */
+ * or behind the camera). A 2DGS model's surfel has no such metric (its third scale is ~0):
+ * the ray's intersection with the surfel's plane, the point the 2DGS rasterizer evaluates,
+ * where it lies on the splat (alpha >= 1/255 there); else, where the rasterizer's
+ * screen-space filter gave the weight, the ray's point at the centre's camera depth (the
+ * rasterizer's depth there). */
 mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, float *xyz,
                                     mgs_error *err);
 /* k distinct indices out of n drawn without replacement with probability proportional to

@@ -108,6 +108,39 @@ size_t mgs_minisplat_simplify_count(size_t n, size_t nonzero, double fraction) {
   return (size_t)((double)n * fraction * ((double)nonzero / (double)n));
 }
 
+/* A surfel's point on the pixel ray o + z dw (dw: the ray's world direction with camera
+ * depth 1, so z is the camera depth): where the ray meets the surfel's plane, the point the
+ * 2DGS rasterizer evaluates, when it lies on the splat (u^2 + v^2 within alpha >= 1/255)
+ * and at a depth the rasterizer keeps (>= 0.2); otherwise the pixel's weight came from the
+ * screen-space filter, whose depth is the centre's: the ray's point at that depth. 0: none. */
+static int surfel_point(const mgs_gaussians *g, size_t gi, const double o[3], const double dw[3], const double fwd[3],
+                        double out[3]) {
+  float R[9];
+  mgs_quat_to_mat3f(g->rot + 4 * gi, R);
+  const float *mu = g->mean + 3 * gi;
+  double om[3] = {mu[0] - o[0], mu[1] - o[1], mu[2] - o[2]};
+  double nd = 0, no = 0, zc = 0;
+  for (int i = 0; i < 3; i++) { nd += R[3 * i + 2] * dw[i]; no += R[3 * i + 2] * om[i]; zc += fwd[i] * om[i]; }
+  double z = no / nd, op = 1.0 / (1.0 + exp(-(double)g->opacity[gi]));
+  if (isfinite(z) && z >= 0.2 && op * 255.0 > 1.0) {
+    double u = 0, v = 0;
+    for (int i = 0; i < 3; i++) {
+      double h = z * dw[i] - om[i];
+      u += R[3 * i] * h;
+      v += R[3 * i + 1] * h;
+    }
+    u /= exp((double)g->log_scale[3 * gi]);
+    v /= exp((double)g->log_scale[3 * gi + 1]);
+    if (u * u + v * v <= 2.0 * log(255.0 * op)) {
+      for (int i = 0; i < 3; i++) out[i] = o[i] + z * dw[i];
+      return 1;
+    }
+  }
+  if (!(zc >= 0.2)) return 0;
+  for (int i = 0; i < 3; i++) out[i] = o[i] + zc * dw[i];
+  return 1;
+}
+
 mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, float *xyz,
                                     mgs_error *err) {
   mgs_raster_blend b;
@@ -129,6 +162,13 @@ mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const
       for (int i = 0; i < 3; i++) {
         d[i] = M[4 * i] * dc[0] + M[4 * i + 1] * dc[1] + M[4 * i + 2] * dc[2];
         dl += d[i] * d[i];
+      }
+      if (g->kind == MGS_MODEL_2DGS) {
+        const double fwd[3] = {M[2], M[6], M[10]};
+        double pt[3];
+        if (surfel_point(g, (size_t)gi, o, d, fwd, pt))
+          for (int i = 0; i < 3; i++) out[i] = (float)pt[i];
+        continue;
       }
       dl = sqrt(dl);
       for (int i = 0; i < 3; i++) d[i] /= dl;
@@ -156,12 +196,17 @@ mgs_status mgs_minisplat_ray_points(mgs_raster *r, const mgs_gaussians *g, const
 /* ---- model replacement ---- */
 
 /* All Gaussians replaced by the reference initialisation at xyz/rgb (n points); Adam as
- * a new optimizer (zero moments, step counts 0), as the authors' training_setup. */
+ * a new optimizer (zero moments, step counts 0), as the authors' training_setup. A 2DGS
+ * model gets 2DGS's init (--model 2dgs from points): the same two 3-NN scales, opacity and
+ * colour, rotations uniform in [0,1)^4 (mgs_init_to_surfels), from a stream seeded by the
+ * strategy's generator (so a resumed run draws the same). */
 static mgs_status replace_model(ms *m, mgs_gaussians *g, mgs_adam *a, const float *xyz, const float *rgb, size_t n,
-                                mgs_error *err) {
+                                mgs_rng *rng, mgs_error *err) {
   mgs_gaussians *ng = NULL;
   mgs_status st = mgs_init_from_points(xyz, rgb, n, g->sh_degree, &ng, err);
   if (st) return st;
+  if (g->kind == MGS_MODEL_2DGS)
+    mgs_init_to_surfels(ng, (uint64_t)mgs_rng_u32(rng) << 32 | mgs_rng_u32(rng));
   uint8_t *keep = calloc(g->n ? g->n : 1, 1);
   if (!keep) { mgs_gaussians_destroy(ng); return mgs_error_set(err, MGS_ERR_NOMEM, "mini-splatting: out of memory"); }
   mgs_model_compact(g, a, keep);
@@ -252,7 +297,7 @@ static mgs_status reinit(ms *m, mgs_strategy_step *s, mgs_error *err) {
       memcpy(rgb + 3 * n, gt + 3 * (size_t)idx[j], 3 * sizeof(float));
     }
   }
-  if (st == MGS_OK && n > 0) st = replace_model(m, g, s->adam, xyz, rgb, n, err);
+  if (st == MGS_OK && n > 0) st = replace_model(m, g, s->adam, xyz, rgb, n, s->rng, err);
 done:
   free(pts); free(w); free(idx); free(xyz); free(rgb);
   return st;
@@ -316,7 +361,7 @@ static mgs_status reset_in_place(ms *m, mgs_strategy_step *s, mgs_error *err) {
   if (!xyz || !rgb) { free(xyz); free(rgb); return mgs_error_set(err, MGS_ERR_NOMEM, "mini-splatting: out of memory"); }
   memcpy(xyz, g->mean, n * 3 * sizeof(float));
   for (size_t i = 0; i < 3 * n; i++) rgb[i] = 0.5f + MGS_SH_C0 * g->sh_dc[i]; /* SH2RGB, unclamped */
-  mgs_status st = replace_model(m, g, s->adam, xyz, rgb, n, err);
+  mgs_status st = replace_model(m, g, s->adam, xyz, rgb, n, s->rng, err);
   free(xyz); free(rgb);
   return st;
 }

@@ -314,29 +314,14 @@ static void blend_tile(const blend_ctx *bc, size_t tile) {
         if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
         m &= ~nd;
         if (!v16i_any(m)) continue;
-        v16f w = v16f_and(m, e.alpha * T[y]);
-        wsum += w;
-        v16i better = m & (w > WMAX[y]);
-        WMAX[y] = v16f_select(better, w, WMAX[y]);
-        IMAX[y] = (better & gidx) | (~better & IMAX[y]);
-        T[y] = v16f_select(m, testT, T[y]);
+        mgs_blend_stat_step(m, e.alpha, testT, gidx, &T[y], &WMAX[y], &IMAX[y], &wsum);
       }
     }
     bc->slot_w[r->isect_slot[j]] = v16f_sum(wsum);
-    if (((j - start) & 31) == 31) {
-      v16i all = DONE[0];
-      for (int yy = 1; yy < nrows; yy++) all &= DONE[yy];
-      if (!v16i_any(~all)) { j++; break; }
-    }
+    if (((j - start) & 31) == 31 && mgs_blend_tile_done(DONE, nrows)) { j++; break; }
   }
   for (; j < end; j++) bc->slot_w[r->isect_slot[j]] = 0; /* after the tile's early stop */
-  for (int y = 0; y < nrows; y++) {
-    size_t p = (size_t)(y0 + y) * W + x0;
-    for (int x = 0; x < ncols; x++) {
-      bc->final_T[p + x] = T[y][x];
-      bc->max_index[p + x] = IMAX[y][x];
-    }
-  }
+  mgs_blend_tile_store(T, IMAX, x0, y0, nrows, ncols, W, bc->final_T, bc->max_index);
 }
 
 static void blend_range(void *ctx, size_t b, size_t e) {

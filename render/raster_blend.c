@@ -88,30 +88,15 @@ static void blend_tile(mgs_raster *r, size_t tile) {
       if (rowdone[y]) continue;
       v16i m;
       v16f alpha, testT = mgs_row_step(sp, dx, (float)(y0 + y) + 0.5f - sp->v, T[y], &DONE[y], &rowdone[y], &m, &alpha);
-      v16f w = v16f_and(m, alpha * T[y]);
-      wsum += w;
-      v16i better = m & (w > WMAX[y]);
-      WMAX[y] = v16f_select(better, w, WMAX[y]);
-      IMAX[y] = (better & gidx) | (~better & IMAX[y]);
-      T[y] = v16f_select(m, testT, T[y]);
+      mgs_blend_stat_step(m, alpha, testT, gidx, &T[y], &WMAX[y], &IMAX[y], &wsum);
     }
     float s = 0;
     for (int l = 0; l < 16; l++) s += wsum[l];
     b->slot_w[r->isect_slot[j]] = s;
-    if (((j - start) & 31) == 31) {
-      v16i all = DONE[0];
-      for (int yy = 1; yy < nrows; yy++) all &= DONE[yy];
-      if (!v16i_any(~all)) { j++; break; }
-    }
+    if (((j - start) & 31) == 31 && mgs_blend_tile_done(DONE, nrows)) { j++; break; }
   }
   for (; j < end; j++) b->slot_w[r->isect_slot[j]] = 0; /* after the tile's early stop */
-  for (int y = 0; y < nrows; y++) {
-    size_t p = (size_t)(y0 + y) * W + x0;
-    for (int x = 0; x < ncols; x++) {
-      b->final_T[p + x] = T[y][x];
-      b->max_index[p + x] = IMAX[y][x];
-    }
-  }
+  mgs_blend_tile_store(T, IMAX, x0, y0, nrows, ncols, W, b->final_T, b->max_index);
 }
 
 static void blend_range(void *ctx, size_t b, size_t e) {

@@ -43,6 +43,39 @@ MGS_VINLINE v16f mgs_row_step(const mgs_splat *sp, v16f dx, float dy, v16f T, v1
   return testT;
 }
 
+/* Blending statistics (raster_blend.c for splats, raster_2dgs_tiles.c for surfels): one
+ * Gaussian's step on a tile row — its weight alpha*T added to *wsum, the row's first
+ * largest weight and its index kept (strictly greater, as the authors' `weight_max <
+ * alpha*T`), the transmittance advanced where m is set. */
+MGS_VINLINE void mgs_blend_stat_step(v16i m, v16f alpha, v16f testT, v16i gidx, v16f *T, v16f *wmax, v16i *imax,
+                                     v16f *wsum) {
+  v16f w = v16f_and(m, alpha * *T);
+  *wsum += w;
+  v16i better = m & (w > *wmax);
+  *wmax = v16f_select(better, w, *wmax);
+  *imax = (better & gidx) | (~better & *imax);
+  *T = v16f_select(m, testT, *T);
+}
+
+/* Every pixel of the tile's nrows rows done (the tile's early stop). */
+MGS_VINLINE int mgs_blend_tile_done(const v16i *done, int nrows) {
+  v16i all = done[0];
+  for (int y = 1; y < nrows; y++) all &= done[y];
+  return !v16i_any(~all);
+}
+
+/* A tile's per-pixel statistics written out: final transmittance and max-weight index. */
+MGS_VINLINE void mgs_blend_tile_store(const v16f *T, const v16i *imax, int x0, int y0, int nrows, int ncols, int W,
+                                      float *final_T, int32_t *max_index) {
+  for (int y = 0; y < nrows; y++) {
+    size_t p = (size_t)(y0 + y) * W + x0;
+    for (int x = 0; x < ncols; x++) {
+      final_T[p + x] = T[y][x];
+      max_index[p + x] = imax[y][x];
+    }
+  }
+}
+
 #if defined(MGS_HALF_ROWS)
 MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
   float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;

@@ -53,6 +53,7 @@ void mgs_eval_geometry_add_metrics(void *cjson_object, const void *metrics) {
   cJSON_AddNumberToObject(obj, "chamfer", gm->chamfer);
   cJSON_AddNumberToObject(obj, "chamfer_accuracy", gm->accuracy);
   cJSON_AddNumberToObject(obj, "chamfer_completeness", gm->completeness);
+  cJSON_AddNumberToObject(obj, "offset", gm->offset);
   cJSON_AddNumberToObject(obj, "fscore", gm->fscore);
   cJSON_AddNumberToObject(obj, "precision", gm->precision);
   cJSON_AddNumberToObject(obj, "recall", gm->recall);
@@ -138,11 +139,11 @@ int mgs_eval_geometry(const char *ply_path, const char *gt_mesh_path, void *cjso
   if (table_out && table_len) {
     if (have_surface)
       snprintf(table_out, table_len,
-               "  Chamfer distance      %.6g  (accuracy %.6g, completeness %.6g)\n"
+               "  Chamfer distance      %.6g  (accuracy %.6g, completeness %.6g; offset %+.3g)\n"
                "  F-score @ %.4g        %.4f  (precision %.4f, recall %.4f; threshold = 1%% of GT diagonal)\n"
                "  floaters (H2)         %ld of %zu Gaussians (opacity < 0.01 and > 3 sigma from GT)\n"
                "  surface               {A = %.2g} (alpha-field), voxel %.4g, %zu triangles, %zu pieces, Euler characteristic %ld\n",
-               gm.chamfer, gm.accuracy, gm.completeness, thr, gm.fscore, gm.precision, gm.recall, floaters, g->n,
+               gm.chamfer, gm.accuracy, gm.completeness, gm.offset, thr, gm.fscore, gm.precision, gm.recall, floaters, g->n,
                EVAL_TAU, info.voxel_size, surf ? surf->nt : 0, pieces, chi);
     else
       snprintf(table_out, table_len,

@@ -65,10 +65,10 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
   }
   if (table_out && table_len)
     snprintf(table_out, table_len,
-             "  depth-fused surface   Chamfer %.6g (accuracy %.6g, completeness %.6g), F-score %.4f\n"
+             "  depth-fused surface   Chamfer %.6g (accuracy %.6g, completeness %.6g; offset %+.3g), F-score %.4f\n"
              "                        (%zu %sviews, %s depth, voxel %.4g, truncation %.3g footprints, %zu triangles,\n"
              "                        %zu pieces, Euler characteristic %ld)\n",
-             gm.chamfer, gm.accuracy, gm.completeness, gm.fscore, rep.views, rep.virtual_views ? "virtual " : "",
+             gm.chamfer, gm.accuracy, gm.completeness, gm.offset, gm.fscore, rep.views, rep.virtual_views ? "virtual " : "",
              rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.voxel_size, rep.truncation / rep.footprint,
              surf->nt, pieces, chi);
   rc = 0;

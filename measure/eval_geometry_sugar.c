@@ -44,9 +44,9 @@ int mgs_eval_geometry_mesh(const char *mesh_path, const char *gt_mesh_path, void
   }
   if (table_out && table_len)
     snprintf(table_out, table_len,
-             "  SuGaR mesh            Chamfer %.6g (accuracy %.6g, completeness %.6g), F-score %.4f\n"
+             "  SuGaR mesh            Chamfer %.6g (accuracy %.6g, completeness %.6g; offset %+.3g), F-score %.4f\n"
              "                        (%s, %zu triangles, %zu pieces, Euler characteristic %ld)\n",
-             gm.chamfer, gm.accuracy, gm.completeness, gm.fscore, mesh_path, m->nt, pieces, chi);
+             gm.chamfer, gm.accuracy, gm.completeness, gm.offset, gm.fscore, mesh_path, m->nt, pieces, chi);
   rc = 0;
 done:
   mgs_mesh_destroy(m);

@@ -52,7 +52,7 @@ static void closest_on_triangle(const float p[3], const float a[3], const float 
   for (int k = 0; k < 3; k++) out[k] = a[k] + ab[k] * v + ac[k] * w;
 }
 
-typedef struct { const mgs_mesh_distance *d; float best[3]; int found; } query_state;
+typedef struct { const mgs_mesh_distance *d; float best[3]; int found; unsigned prim; } query_state;
 
 static bool query_cb(struct RTCPointQueryFunctionArguments *args) {
   query_state *s = (query_state *)args->userPtr;
@@ -66,6 +66,7 @@ static bool query_cb(struct RTCPointQueryFunctionArguments *args) {
     args->query->radius = dist;
     memcpy(s->best, q, sizeof q);
     s->found = 1;
+    s->prim = args->primID;
     return true;
   }
   return false;
@@ -117,7 +118,17 @@ void mgs_mesh_distance_destroy(mgs_mesh_distance *d) {
   free(d);
 }
 
-typedef struct { const mgs_mesh_distance *d; const float *xyz; float *dist, *closest; } query_job;
+typedef struct { const mgs_mesh_distance *d; const float *xyz; float *dist, *closest; int sign; } query_job;
+
+/* The sign of p - q against the face normal of triangle prim (zero distance: +). */
+static float side(const mgs_mesh_distance *d, unsigned prim, const float p[3], const float q[3]) {
+  const uint32_t *tri = d->t + 3 * (size_t)prim;
+  const float *a = d->v + 3 * tri[0], *b = d->v + 3 * tri[1], *c = d->v + 3 * tri[2];
+  float e1[3], e2[3];
+  for (int k = 0; k < 3; k++) e1[k] = b[k] - a[k], e2[k] = c[k] - a[k];
+  const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  return (p[0] - q[0]) * n[0] + (p[1] - q[1]) * n[1] + (p[2] - q[2]) * n[2] < 0 ? -1.0f : 1.0f;
+}
 
 static void query_range(void *ctx, size_t b, size_t e) {
   query_job *j = ctx;
@@ -128,16 +139,32 @@ static void query_range(void *ctx, size_t b, size_t e) {
     q.radius = INFINITY;
     struct RTCPointQueryContext ctxq;
     rtcInitPointQueryContext(&ctxq);
-    query_state s = {j->d, {0, 0, 0}, 0};
+    query_state s = {j->d, {0, 0, 0}, 0, 0};
     rtcPointQuery(j->d->scene, &q, &ctxq, query_cb, &s);
     j->dist[i] = s.found ? q.radius : INFINITY;
+    if (s.found && j->sign) j->dist[i] *= side(j->d, s.prim, j->xyz + 3 * i, s.best);
     if (j->closest) memcpy(j->closest + 3 * i, s.best, sizeof s.best);
   }
 }
 
 void mgs_mesh_distance_query(const mgs_mesh_distance *d, size_t n, const float *xyz, float *dist, float *closest) {
-  query_job j = {d, xyz, dist, closest};
+  query_job j = {d, xyz, dist, closest, 0};
   mgs_parallel_for(0, n, 256, query_range, &j);
+}
+
+void mgs_mesh_distance_query_signed(const mgs_mesh_distance *d, size_t n, const float *xyz, float *signed_dist) {
+  query_job j = {d, xyz, signed_dist, NULL, 1};
+  mgs_parallel_for(0, n, 256, query_range, &j);
+}
+
+double mgs_mesh_signed_volume6(const mgs_mesh *m) {
+  double v = 0;
+  for (size_t i = 0; i < m->nt; i++) {
+    const float *a = m->v + 3 * (size_t)m->t[3 * i], *b = m->v + 3 * (size_t)m->t[3 * i + 1], *c = m->v + 3 * (size_t)m->t[3 * i + 2];
+    v += (double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) - (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+         (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0]);
+  }
+  return v;
 }
 
 mgs_status mgs_mesh_sample_surface(const mgs_mesh *m, size_t n, uint64_t seed, float *xyz, float *normal, mgs_error *err) {
@@ -185,14 +212,22 @@ mgs_status mgs_mesh_sample_surface(const mgs_mesh *m, size_t n, uint64_t seed, f
 
 /* Mean distance of samples of `from` to surface `to`, and share within threshold. */
 static mgs_status one_way(const mgs_mesh *from, const mgs_mesh *to, size_t n, double thr, uint64_t seed, double *mean,
-                          double *within, mgs_error *err) {
+                          double *within, double *offset, mgs_error *err) {
   float *pts = malloc(n * 3 * sizeof(float)), *dist = malloc(n * sizeof(float));
   mgs_mesh_distance *d = NULL;
   mgs_status st = MGS_ERR_NOMEM;
   if (!pts || !dist) { mgs_error_set(err, st, "mesh compare: out of memory"); goto done; }
   if ((st = mgs_mesh_sample_surface(from, n, seed, pts, NULL, err)) != MGS_OK) goto done;
   if ((st = mgs_mesh_distance_create(to, &d, err)) != MGS_OK) goto done;
-  mgs_mesh_distance_query(d, n, pts, dist, NULL);
+  if (offset) {
+    mgs_mesh_distance_query_signed(d, n, pts, dist);
+    const double orient = mgs_mesh_signed_volume6(to) < 0 ? -1.0 : 1.0;
+    double s = 0;
+    for (size_t i = 0; i < n; i++) s += dist[i], dist[i] = fabsf(dist[i]);
+    *offset = orient * s / (double)n;
+  } else {
+    mgs_mesh_distance_query(d, n, pts, dist, NULL);
+  }
   double sum = 0;
   size_t in = 0;
   for (size_t i = 0; i < n; i++) { sum += dist[i]; in += dist[i] <= thr; }
@@ -209,9 +244,9 @@ mgs_status mgs_mesh_compare(const mgs_mesh *pred, const mgs_mesh *gt, size_t sam
                             mgs_geometry_metrics *out, mgs_error *err) {
   memset(out, 0, sizeof *out);
   if (samples == 0 || !(threshold > 0)) return mgs_error_set(err, MGS_ERR_ARG, "mesh compare: samples and threshold must be positive");
-  mgs_status st = one_way(pred, gt, samples, threshold, seed, &out->accuracy, &out->precision, err);
+  mgs_status st = one_way(pred, gt, samples, threshold, seed, &out->accuracy, &out->precision, &out->offset, err);
   if (st != MGS_OK) return st;
-  st = one_way(gt, pred, samples, threshold, seed + 1, &out->completeness, &out->recall, err);
+  st = one_way(gt, pred, samples, threshold, seed + 1, &out->completeness, &out->recall, NULL, err);
   if (st != MGS_OK) return st;
   out->chamfer = 0.5 * (out->accuracy + out->completeness);
   out->threshold = threshold;

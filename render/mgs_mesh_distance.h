@@ -20,6 +20,12 @@ void mgs_mesh_distance_destroy(mgs_mesh_distance *d);
  * point -> closest[n*3] (may be NULL). Parallel. */
 void mgs_mesh_distance_query(const mgs_mesh_distance *d, size_t n, const float *xyz, float *dist,
                              float *closest);
+/* Signed distance: as above, positive on the side the closest triangle's face normal points
+ * to (its winding, counter-clockwise = front). At a convex or concave edge either adjacent
+ * face gives the same sign, so only exact ties between non-adjacent faces can differ. */
+void mgs_mesh_distance_query_signed(const mgs_mesh_distance *d, size_t n, const float *xyz, float *signed_dist);
+/* Six times the signed volume the triangles enclose (positive: wound outward). */
+double mgs_mesh_signed_volume6(const mgs_mesh *m);
 
 /* n points distributed uniformly by area on the surface (seeded, reproducible), written to
  * xyz[n*3]; the face normals of the sampled triangles to normal[n*3] (may be NULL).
@@ -31,6 +37,9 @@ typedef struct mgs_geometry_metrics {
   double accuracy;     /* mean distance, samples of `pred` -> `gt` surface */
   double completeness; /* mean distance, samples of `gt` -> `pred` surface */
   double chamfer;      /* (accuracy + completeness) / 2 */
+  double offset;       /* mean signed distance, samples of `pred` -> `gt` (positive: outside gt,
+                          with gt's winding taken outward by its signed volume): a systematic
+                          shrink or growth of the reconstruction shows here, not in Chamfer */
   double threshold;    /* F-score distance threshold (absolute) */
   double precision, recall, fscore; /* share of pred / gt samples within threshold; 2PR/(P+R) */
   size_t samples;      /* per surface */

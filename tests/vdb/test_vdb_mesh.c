@@ -1,7 +1,8 @@
 /* Mesh side of the vdb layer: Embree point-to-mesh distances against the analytic torus
  * distance; area-uniform sampling; a torus surface sampled into small flat Gaussians gives
  * an SDF whose zero level set (extracted with volumeToMesh) is within 1 voxel of the torus
- * (Chamfer); mesh extraction is closed and outward-oriented. */
+ * (Chamfer); mesh extraction is closed and outward-oriented; signed distances and the
+ * signed offset of a thicker or thinner torus, whatever the reference's winding. */
 #include <math.h>
 #include <stdlib.h>
 #include "core/mgs_math.h"
@@ -13,15 +14,15 @@
 
 static const double TR = 1.0, Tr = 0.4; /* torus radii, axis z */
 
-static mgs_mesh *torus_mesh(int nu, int nv) {
+static mgs_mesh *torus_mesh_r(int nu, int nv, double r) {
   mgs_mesh *m = mgs_mesh_create((size_t)nu * nv, (size_t)2 * nu * nv);
   for (int i = 0; i < nu; i++)
     for (int j = 0; j < nv; j++) {
       double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
       float *p = m->v + 3 * ((size_t)i * nv + j);
-      p[0] = (float)((TR + Tr * cos(v)) * cos(u));
-      p[1] = (float)((TR + Tr * cos(v)) * sin(u));
-      p[2] = (float)(Tr * sin(v));
+      p[0] = (float)((TR + r * cos(v)) * cos(u));
+      p[1] = (float)((TR + r * cos(v)) * sin(u));
+      p[2] = (float)(r * sin(v));
     }
   size_t t = 0;
   for (int i = 0; i < nu; i++)
@@ -35,20 +36,16 @@ static mgs_mesh *torus_mesh(int nu, int nv) {
   return m;
 }
 
-static double torus_distance(const float p[3]) {
+static mgs_mesh *torus_mesh(int nu, int nv) { return torus_mesh_r(nu, nv, Tr); }
+
+static double torus_signed_distance(const float p[3]) {
   double q = sqrt((double)p[0] * p[0] + (double)p[1] * p[1]) - TR;
-  return fabs(sqrt(q * q + (double)p[2] * p[2]) - Tr);
+  return sqrt(q * q + (double)p[2] * p[2]) - Tr;
 }
 
-static double signed_volume(const mgs_mesh *m) {
-  double vol = 0;
-  for (size_t i = 0; i < m->nt; i++) {
-    const float *a = m->v + 3 * m->t[3 * i], *b = m->v + 3 * m->t[3 * i + 1], *c = m->v + 3 * m->t[3 * i + 2];
-    vol += (a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) - a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
-            a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0])) / 6.0;
-  }
-  return vol;
-}
+static double torus_distance(const float p[3]) { return fabs(torus_signed_distance(p)); }
+
+static double signed_volume(const mgs_mesh *m) { return mgs_mesh_signed_volume6(m) / 6.0; }
 
 static void test_embree_distance(void) {
   mgs_mesh *m = torus_mesh(128, 48);
@@ -88,6 +85,43 @@ static void test_embree_distance(void) {
   CHECK_OK(mgs_mesh_compare(m, m, 5000, 0.01, 5, &gm, &err), &err);
   CHECK_NEAR(gm.chamfer, 0, 1e-5);
   CHECK_NEAR(gm.fscore, 1, 1e-9);
+  CHECK_NEAR(gm.offset, 0, 1e-6);
+  /* Signed distances: the analytic torus' (outside +) up to the sagitta, with the mesh's
+   * winding taken outward by its signed volume; a flipped winding flips every sign. */
+  const double orient = signed_volume(m) < 0 ? -1 : 1;
+  CHECK(fabs(signed_volume(m) - 2 * M_PI * M_PI * TR * Tr * Tr) < 0.01 * 2 * M_PI * M_PI * TR * Tr * Tr);
+  float *sd = malloc(N * sizeof(float));
+  mgs_mesh_distance_query_signed(d, N, p, sd);
+  double worst_s = 0;
+  int flips = 0;
+  for (int i = 0; i < N; i++) {
+    double a = torus_signed_distance(p + 3 * i);
+    worst_s = fmax(worst_s, fabs(orient * sd[i] - a));
+    flips += fabs(a) > 2.5e-3 && (orient * sd[i] < 0) != (a < 0);
+  }
+  CHECK_NEAR(worst_s, 0, 2.5e-3);
+  CHECK(flips == 0);
+  /* offset: a tube thicker by delta lies outside (+delta), the thinner one inside (-delta),
+   * whatever the reference's winding; Chamfer cannot tell the two apart. */
+  const double delta = 0.02;
+  mgs_mesh *fat = torus_mesh_r(128, 48, Tr + delta), *rev = torus_mesh(128, 48);
+  for (size_t i = 0; i < rev->nt; i++) {
+    uint32_t t1 = rev->t[3 * i + 1];
+    rev->t[3 * i + 1] = rev->t[3 * i + 2], rev->t[3 * i + 2] = t1;
+  }
+  CHECK(signed_volume(rev) * signed_volume(m) < 0);
+  mgs_geometry_metrics out, in, out_rev;
+  CHECK_OK(mgs_mesh_compare(fat, m, 8000, 0.01, 5, &out, &err), &err);
+  CHECK_OK(mgs_mesh_compare(m, fat, 8000, 0.01, 5, &in, &err), &err);
+  CHECK_OK(mgs_mesh_compare(fat, rev, 8000, 0.01, 5, &out_rev, &err), &err);
+  CHECK_NEAR(out.offset, delta, 2e-3);
+  CHECK_NEAR(in.offset, -delta, 2e-3);
+  CHECK_NEAR(out_rev.offset, out.offset, 1e-9);
+  CHECK_NEAR(out.accuracy, delta, 2e-3);
+  CHECK_NEAR(in.accuracy, delta, 2e-3);
+  mgs_mesh_destroy(fat);
+  mgs_mesh_destroy(rev);
+  free(sd);
   free(p); free(cl); free(s);
   mgs_mesh_distance_destroy(d);
   mgs_mesh_destroy(m);

@@ -14,34 +14,12 @@
 #include "render/mgs_mesh_distance.h"
 #include "vdb_test_util.h"
 
-static mgs_mesh *torus_mesh(double R, double r, int nu, int nv) {
-  mgs_mesh *m = mgs_mesh_create((size_t)nu * nv, (size_t)2 * nu * nv);
-  for (int i = 0; i < nu; i++)
-    for (int j = 0; j < nv; j++) {
-      double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
-      float *p = m->v + 3 * ((size_t)i * nv + j);
-      p[0] = (float)((R + r * cos(v)) * cos(u));
-      p[1] = (float)((R + r * cos(v)) * sin(u));
-      p[2] = (float)(r * sin(v));
-    }
-  size_t t = 0;
-  for (int i = 0; i < nu; i++)
-    for (int j = 0; j < nv; j++) {
-      uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j);
-      uint32_t c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
-      uint32_t *T = m->t + 3 * t;
-      T[0] = a; T[1] = b; T[2] = c; T[3] = a; T[4] = c; T[5] = d;
-      t += 2;
-    }
-  return m;
-}
-
 static void test_eval_torus(void) {
   const char *dir = mgs_test_tmpdir("vdb_eval");
   char gt_path[512], ply_path[512];
   snprintf(gt_path, sizeof gt_path, "%s/gt.ply", dir);
   snprintf(ply_path, sizeof ply_path, "%s/model.ply", dir);
-  mgs_mesh *gt = torus_mesh(1.0, 0.4, 192, 64);
+  mgs_mesh *gt = vt_torus_mesh(1.0, 0.4, 192, 64);
   mgs_error err = {0};
   CHECK_OK(mgs_mesh_write(gt_path, gt, &err), &err);
   /* Flat discs on the surface (as test_vdb_mesh), sized for the eval's voxel (diag/256). */
@@ -80,7 +58,12 @@ static void test_eval_torus(void) {
   CHECK(ch && cJSON_IsNumber(ch) && vs && cJSON_IsNumber(vs));
   if (ch && vs && cJSON_IsNumber(ch)) CHECK_MSG(ch->valuedouble < 1.5 * vs->valuedouble, "chamfer %g voxel %g", ch->valuedouble, vs->valuedouble);
   CHECK(fs && cJSON_IsNumber(fs) && fs->valuedouble > 0.8);
-  CHECK(strstr(table, "Chamfer") && strstr(table, "floaters"));
+  /* the signed offset: within the accuracy, and |offset| <= accuracy by definition */
+  cJSON *of = cJSON_GetObjectItem(obj, "offset"), *ac = cJSON_GetObjectItem(obj, "chamfer_accuracy");
+  CHECK(of && cJSON_IsNumber(of) && ac && cJSON_IsNumber(ac));
+  if (of && ac && cJSON_IsNumber(of) && cJSON_IsNumber(ac))
+    CHECK_MSG(fabs(of->valuedouble) <= ac->valuedouble + 1e-12, "offset %g accuracy %g", of->valuedouble, ac->valuedouble);
+  CHECK(strstr(table, "Chamfer") && strstr(table, "floaters") && strstr(table, "offset"));
   cJSON_Delete(obj);
   /* Missing files: non-zero, no crash. */
   obj = cJSON_CreateObject();

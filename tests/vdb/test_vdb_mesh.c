@@ -14,29 +14,7 @@
 
 static const double TR = 1.0, Tr = 0.4; /* torus radii, axis z */
 
-static mgs_mesh *torus_mesh_r(int nu, int nv, double r) {
-  mgs_mesh *m = mgs_mesh_create((size_t)nu * nv, (size_t)2 * nu * nv);
-  for (int i = 0; i < nu; i++)
-    for (int j = 0; j < nv; j++) {
-      double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
-      float *p = m->v + 3 * ((size_t)i * nv + j);
-      p[0] = (float)((TR + r * cos(v)) * cos(u));
-      p[1] = (float)((TR + r * cos(v)) * sin(u));
-      p[2] = (float)(r * sin(v));
-    }
-  size_t t = 0;
-  for (int i = 0; i < nu; i++)
-    for (int j = 0; j < nv; j++) {
-      uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j);
-      uint32_t c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
-      uint32_t *T = m->t + 3 * t;
-      T[0] = a; T[1] = b; T[2] = c; T[3] = a; T[4] = c; T[5] = d;
-      t += 2;
-    }
-  return m;
-}
-
-static mgs_mesh *torus_mesh(int nu, int nv) { return torus_mesh_r(nu, nv, Tr); }
+static mgs_mesh *torus_mesh(int nu, int nv) { return vt_torus_mesh(TR, Tr, nu, nv); }
 
 static double torus_signed_distance(const float p[3]) {
   double q = sqrt((double)p[0] * p[0] + (double)p[1] * p[1]) - TR;
@@ -104,7 +82,7 @@ static void test_embree_distance(void) {
   /* offset: a tube thicker by delta lies outside (+delta), the thinner one inside (-delta),
    * whatever the reference's winding; Chamfer cannot tell the two apart. */
   const double delta = 0.02;
-  mgs_mesh *fat = torus_mesh_r(128, 48, Tr + delta), *rev = torus_mesh(128, 48);
+  mgs_mesh *fat = vt_torus_mesh(TR, Tr + delta, 128, 48), *rev = torus_mesh(128, 48);
   for (size_t i = 0; i < rev->nt; i++) {
     uint32_t t1 = rev->t[3 * i + 1];
     rev->t[3 * i + 1] = rev->t[3 * i + 2], rev->t[3 * i + 2] = t1;

@@ -7,8 +7,34 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/mgs_gaussians.h"
+#include "core/mgs_math.h"
+#include "core/mgs_mesh.h"
 #include "core/mgs_rng.h"
 #include "vdb/mgs_vdb.h"
+
+/* A closed torus mesh around z (radii R, r; nu x nv quads, two triangles each), wound
+ * consistently (its signed volume's sign is the tests' to check). */
+static inline mgs_mesh *vt_torus_mesh(double R, double r, int nu, int nv) {
+  mgs_mesh *m = mgs_mesh_create((size_t)nu * nv, (size_t)2 * nu * nv);
+  for (int i = 0; i < nu; i++)
+    for (int j = 0; j < nv; j++) {
+      double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      float *p = m->v + 3 * ((size_t)i * nv + j);
+      p[0] = (float)((R + r * cos(v)) * cos(u));
+      p[1] = (float)((R + r * cos(v)) * sin(u));
+      p[2] = (float)(r * sin(v));
+    }
+  size_t t = 0;
+  for (int i = 0; i < nu; i++)
+    for (int j = 0; j < nv; j++) {
+      uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j);
+      uint32_t c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
+      uint32_t *T = m->t + 3 * t;
+      T[0] = a; T[1] = b; T[2] = c; T[3] = a; T[4] = c; T[5] = d;
+      t += 2;
+    }
+  return m;
+}
 
 /* Appends a Gaussian with std-devs s, rotation q (w,x,y,z), opacity alpha. */
 /* Runs a CLI command with stdout into cli_out.txt and stderr into cli_stderr.txt (also

@@ -220,10 +220,12 @@ static mgs_status adc_save(void *self, FILE *f, mgs_error *err) {
 static mgs_status adc_load(void *self, FILE *f, size_t n_gaussians, mgs_error *err) {
   adc *a = self;
   uint64_t n = 0;
-  if (fread(&n, sizeof n, 1, f) != 1 || n != n_gaussians)
+  /* n = 0: written before the first step sized the accumulators (the run's initial
+     checkpoint); the first step would zero them for every Gaussian, as this does */
+  if (fread(&n, sizeof n, 1, f) != 1 || (n != n_gaussians && n != 0))
     return mgs_error_set(err, MGS_ERR_FORMAT, "adc state in the checkpoint does not match its %zu Gaussians", n_gaussians);
-  mgs_status st = adc_resize(a, (size_t)n, err);
-  if (st) return st;
+  mgs_status st = adc_resize(a, n_gaussians, err);
+  if (st || n == 0) return st;
   if (n && (fread(a->st.grad_accum, sizeof(float), n, f) != n || fread(a->st.count, sizeof(int), n, f) != n ||
             fread(a->st.max_radii, sizeof(int), n, f) != n))
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the adc state");

@@ -490,11 +490,13 @@ static mgs_status ms_load(void *self, FILE *f, size_t n_gaussians, mgs_error *er
   if (st) return st;
   char magic[8];
   uint64_t n = 0;
-  if (fread(magic, 1, 8, f) != 8 || memcmp(magic, MS_MAGIC, 8) || fread(&n, sizeof n, 1, f) != 1 || n != n_gaussians)
+  /* n = 0: the run's initial checkpoint, before the first step sized the flags (as adc's) */
+  if (fread(magic, 1, 8, f) != 8 || memcmp(magic, MS_MAGIC, 8) || fread(&n, sizeof n, 1, f) != 1 ||
+      (n != n_gaussians && n != 0))
     return mgs_error_set(err, MGS_ERR_FORMAT, "mini-splatting state in the checkpoint does not match its %zu Gaussians",
                          n_gaussians);
-  if ((st = blur_resize(m, (size_t)n, err))) return st;
-  if (n && fread(m->blur, 1, n, f) != n) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the mini-splatting state");
+  if ((st = blur_resize(m, n_gaussians, err)) || n == 0) return st;
+  if (fread(m->blur, 1, n, f) != n) return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint truncated in the mini-splatting state");
   return MGS_OK;
 }
 

@@ -69,7 +69,8 @@ has 2dgs-morse-r && has 2dgs && extra+=(--base 2dgs-morse-r=2dgs)
 has ms-morse-r && has mini-splatting && extra+=(--base ms-morse-r=mini-splatting)
 for v in sugar gaussianpro topology-gs; do has $v && extra+=(--variant-seeds "$v=${SEEDS_OTHER:-3}"); done
 sv=$(keep "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}"); [ -n "$sv" ] && extra+=(--sweep-variants "$sv")
-has mini-splatting && extra+=(--knob mini-splatting=--simplify-fraction:0.5 --sweep-of mini-splatting=0.25,0.5,1.5,2)
+# its own sweep (the knob the issue names), unless sweeps are off (SWEEP=none: experiment_30k.sh)
+has mini-splatting && [ "${SWEEP:-}" != none ] && extra+=(--knob mini-splatting=--simplify-fraction:0.5 --sweep-of mini-splatting=0.25,0.5,1.5,2)
 fv=$(keep "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}"); [ -n "$fv" ] && extra+=(--first "$fv")
 MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
   --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" --sweep-seeds "${SWEEP_SEEDS:-3}" \

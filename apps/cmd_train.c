@@ -190,7 +190,7 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
   char *ckpt = mgs_path_join(run, "checkpoint.mgsckpt");
   if (!ckpt) return 1;
   if (c->resume && !mgs_path_exists(ckpt)) {
-    fprintf(stderr, "morsegs train: %s: no checkpoint to resume from\n", ckpt);
+    fprintf(stderr, "morsegs train: %s: no checkpoint to resume from (a run stopped before its first checkpoint has trained nothing: start it again with --force)\n", ckpt);
     free(ckpt);
     return 1;
   }
@@ -220,12 +220,13 @@ int mgs_cmd_train_config(mgs_train_config *c, const char *data) {
     if ((st = mgs_trainer_load_checkpoint(t, ckpt, &err))) goto done;
     mgs_info("resuming %s at iteration %d with %zu Gaussians", run, mgs_trainer_iteration(t), mgs_trainer_model(t)->n);
   }
-  /* a checkpoint before anything else of the run is written: from here on a run killed
-     at any moment can --resume */
-  if (!c->resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
-  /* settings record and cameras before training (a crash still leaves them) */
+  /* settings record and cameras before training (a crash still leaves them), then a
+     checkpoint: from there on a run killed at any moment can --resume; killed before it,
+     the run has trained nothing and --resume says so (a checkpoint without the record
+     could only resume with whatever flags are typed then) */
   if ((st = write_record(c, data, run, ds, &su, &err))) goto done;
   if ((st = mgs_run_write_cameras(run, ds, &err))) goto done;
+  if (!c->resume && o.checkpoint_every > 0 && (st = mgs_trainer_save_checkpoint(t, ckpt, &err))) goto done;
 
   struct sigaction sa, old;
   memset(&sa, 0, sizeof sa);

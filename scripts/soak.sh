@@ -171,8 +171,13 @@ while [ $killed -lt "$kills" ]; do
     ls -a "$run" 2>/dev/null | grep -q "checkpoint.mgsckpt.tmp-" && in_write=$((in_write + 1))
     if [ ! -f "$run/checkpoint.mgsckpt" ]; then
       no_ckpt_window=$((no_ckpt_window + 1))
-      # before its first checkpoint a killed run leaves no training state at all
-      [ -f "$run/cfg_args" ] && die "kill $killed: cfg_args written but no checkpoint"
+      # before its first checkpoint a killed run has trained nothing: --resume must say so
+      # (the next start is a fresh one with --force)
+      if [ -f "$run/cfg_args" ]; then
+        "$cli" train "$ds" -o "$run" --resume "${common[@]}" > "$work/nockpt.log" 2>&1
+        grep -q "no checkpoint to resume from" "$work/nockpt.log" ||
+          die "kill $killed: record but no checkpoint, --resume: $(cat "$work/nockpt.log")"
+      fi
     fi
   else
     wait $pid; rc=$?

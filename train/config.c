@@ -336,6 +336,16 @@ mgs_status mgs_config_parse(mgs_train_config *c, int argc, char **argv, const ch
     if (path && mgs_path_exists(path)) {
       st = mgs_settings_read(path, &rec, err);
       if (st == MGS_OK) st = mgs_config_restore(c, &rec, path, err);
+    } else if (path) {
+      /* without the record a resume would silently train with whatever was typed now (a run
+         killed between its first checkpoint and its record has trained nothing yet) */
+      char *ck = mgs_path_join(c->output, "checkpoint.mgsckpt");
+      if (ck && mgs_path_exists(ck))
+        st = mgs_error_set(err, MGS_ERR_FORMAT,
+                           "%s: not found: the run's settings are unknown, so --resume cannot continue it "
+                           "(a run stopped before it recorded them has trained nothing: start it again with --force)",
+                           path);
+      free(ck);
     }
     mgs_settings_free(&rec);
     free(path);

@@ -3,7 +3,8 @@
  * `--resume` ends byte-identical to the uninterrupted run — for settings that were once
  * lost on resume (--sparse-adam/--dense-adam, --view-order, --visibility, --image-cache-mb)
  * and for a MorseGS preset, and with the SH degree raised before and after the interrupt; a
- * resume typing a contradicting value is refused naming both; cfg_args holds each of them. */
+ * resume typing a contradicting value is refused naming both; cfg_args holds each of them; a
+ * checkpoint whose cfg_args is gone is refused, not resumed with the flags typed now. */
 #include "mgs_test.h"
 #include "core/mgs_core.h"
 
@@ -45,5 +46,16 @@ int main(void) {
     CHECK_MSG(mgs_test_sh("cmp %s/point_cloud/iteration_120/point_cloud.ply %s/point_cloud/iteration_120/point_cloud.ply", a, b) == 0,
               "resumed run differs with %s", cases[k].flags);
   }
+  /* a checkpoint without its settings record is not resumed with whatever is typed now */
+  char r[512], path[1100];
+  snprintf(r, sizeof r, "%s/norecord", tmp);
+  CHECK(mgs_test_sh("MGS_TRAIN_INTERRUPT_AT=10 %s train %s/scene -o %s %s --lambda-dssim 0.5 2>/dev/null", cli, tmp, r, common) == 130);
+  snprintf(path, sizeof path, "%s/cfg_args", r);
+  CHECK(remove(path) == 0);
+  snprintf(path, sizeof path, "%s/err.txt", tmp);
+  CHECK(mgs_test_sh("%s train %s/scene -o %s --resume --quiet 2> %s", cli, tmp, r, path) == 2);
+  CHECK_MSG(mgs_test_file_has(path, "cfg_args: not found") && mgs_test_file_has(path, "--force"), "%s: no refusal", path);
+  snprintf(path, sizeof path, "%s/point_cloud/iteration_120", r);
+  CHECK(mgs_test_sh("test -e %s", path) != 0);
   return mgs_test_finish();
 }

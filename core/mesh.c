@@ -149,6 +149,16 @@ double mgs_mesh_area(const mgs_mesh *m) {
   return a;
 }
 
+double mgs_mesh_signed_volume(const mgs_mesh *m) {
+  double v = 0;
+  for (size_t t = 0; t < m->nt; t++) {
+    const float *a = m->v + 3 * (size_t)m->t[3 * t], *b = m->v + 3 * (size_t)m->t[3 * t + 1], *c = m->v + 3 * (size_t)m->t[3 * t + 2];
+    v += (double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) - (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+         (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0]);
+  }
+  return v / 6.0;
+}
+
 static int edge_cmp(const void *a, const void *b) {
   uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
   return x < y ? -1 : x > y;

@@ -49,6 +49,9 @@ void mgs_mesh_translate(mgs_mesh *m, const double offset[3], int sign);
  * `size`; returns the scale applied, centre in `center_out` (may be NULL). */
 double mgs_mesh_normalize(mgs_mesh *m, double size, double center_out[3]);
 double mgs_mesh_area(const mgs_mesh *m);
+/* The volume the triangles enclose, signed: positive when they are wound outward
+ * (counter-clockwise seen from outside); meaningful for a closed mesh. */
+double mgs_mesh_signed_volume(const mgs_mesh *m);
 /* Edges used by other than exactly two triangles (0 for a closed 2-manifold). */
 size_t mgs_mesh_count_boundary_or_nonmanifold_edges(const mgs_mesh *m);
 

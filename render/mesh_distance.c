@@ -157,16 +157,6 @@ void mgs_mesh_distance_query_signed(const mgs_mesh_distance *d, size_t n, const 
   mgs_parallel_for(0, n, 256, query_range, &j);
 }
 
-double mgs_mesh_signed_volume6(const mgs_mesh *m) {
-  double v = 0;
-  for (size_t i = 0; i < m->nt; i++) {
-    const float *a = m->v + 3 * (size_t)m->t[3 * i], *b = m->v + 3 * (size_t)m->t[3 * i + 1], *c = m->v + 3 * (size_t)m->t[3 * i + 2];
-    v += (double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) - (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
-         (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0]);
-  }
-  return v;
-}
-
 mgs_status mgs_mesh_sample_surface(const mgs_mesh *m, size_t n, uint64_t seed, float *xyz, float *normal, mgs_error *err) {
   if (!m || m->nt == 0) return mgs_error_set(err, MGS_ERR_ARG, "surface sampling: empty mesh");
   double *cdf = malloc(m->nt * sizeof(double));
@@ -221,7 +211,7 @@ static mgs_status one_way(const mgs_mesh *from, const mgs_mesh *to, size_t n, do
   if ((st = mgs_mesh_distance_create(to, &d, err)) != MGS_OK) goto done;
   if (offset) {
     mgs_mesh_distance_query_signed(d, n, pts, dist);
-    const double orient = mgs_mesh_signed_volume6(to) < 0 ? -1.0 : 1.0;
+    const double orient = mgs_mesh_signed_volume(to) < 0 ? -1.0 : 1.0;
     double s = 0;
     for (size_t i = 0; i < n; i++) s += dist[i], dist[i] = fabsf(dist[i]);
     *offset = orient * s / (double)n;

@@ -24,8 +24,6 @@ void mgs_mesh_distance_query(const mgs_mesh_distance *d, size_t n, const float *
  * to (its winding, counter-clockwise = front). At a convex or concave edge either adjacent
  * face gives the same sign, so only exact ties between non-adjacent faces can differ. */
 void mgs_mesh_distance_query_signed(const mgs_mesh_distance *d, size_t n, const float *xyz, float *signed_dist);
-/* Six times the signed volume the triangles enclose (positive: wound outward). */
-double mgs_mesh_signed_volume6(const mgs_mesh *m);
 
 /* n points distributed uniformly by area on the surface (seeded, reproducible), written to
  * xyz[n*3]; the face normals of the sampled triangles to normal[n*3] (may be NULL).

@@ -105,16 +105,6 @@ long mesh_euler(const mgs_mesh *m) {
   return V - E + (long)m->nt;
 }
 
-double mesh_signed_volume(const mgs_mesh *m) {
-  double vol = 0;
-  for (size_t t = 0; t < m->nt; t++) {
-    const float *a = m->v + 3 * m->t[3 * t], *b = m->v + 3 * m->t[3 * t + 1], *c = m->v + 3 * m->t[3 * t + 2];
-    vol += (a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) - a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
-            a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0])) / 6.0;
-  }
-  return vol;
-}
-
 int files_equal(const char *a, const char *b) {
   FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
   int eq = fa && fb;

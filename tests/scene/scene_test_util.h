@@ -24,8 +24,6 @@ mask_compare compare_silhouette(const float *alpha, int stride, const uint8_t *p
 size_t mesh_components(const mgs_mesh *m);
 /* V - E + F over the vertices the triangles use. */
 long mesh_euler(const mgs_mesh *m);
-/* Signed volume (positive when triangles face outward). */
-double mesh_signed_volume(const mgs_mesh *m);
 
 int files_equal(const char *a, const char *b);
 /* Runs a shell command with output to `log`; returns the exit status (-1 on failure). */

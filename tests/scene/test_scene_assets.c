@@ -20,7 +20,7 @@ static void test_sphere(void) {
   CHECK(mgs_mesh_count_boundary_or_nonmanifold_edges(m) == 0);
   CHECK(mesh_components(m) == 1);
   CHECK(mesh_euler(m) == 2);
-  CHECK(mesh_signed_volume(m) > 1.0); /* ~ 4/3 pi 0.8^3 = 2.1, outward */
+  CHECK(mgs_mesh_signed_volume(m) > 1.0); /* ~ 4/3 pi 0.8^3 = 2.1, outward */
   mgs_mesh_destroy(m);
 }
 
@@ -31,7 +31,7 @@ static void test_genus2(void) {
   CHECK(mesh_components(m) == 1);
   long chi = mesh_euler(m);
   CHECK_MSG(chi == -2, "Euler characteristic %ld, want -2 (genus 2)", chi);
-  CHECK(mesh_signed_volume(m) > 0.1);
+  CHECK(mgs_mesh_signed_volume(m) > 0.1);
   mgs_mesh_destroy(m);
 }
 
@@ -44,12 +44,12 @@ static void test_thin(void) {
   CHECK(parts == 14);
   /* Each part is a sphere or a torus: chi = 2 * (spheres) + 0 * (tori) = 2 * 13. */
   CHECK(mesh_euler(m) == 26);
-  CHECK(mesh_signed_volume(m) > 0);
+  CHECK(mgs_mesh_signed_volume(m) > 0);
   /* Thin: the bounding box is big but the volume is tiny. */
   double lo[3], hi[3];
   mgs_mesh_bounds(m, lo, hi);
   double box = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-  CHECK(mesh_signed_volume(m) < 0.1 * box);
+  CHECK(mgs_mesh_signed_volume(m) < 0.1 * box);
   mgs_mesh_destroy(m);
 }
 

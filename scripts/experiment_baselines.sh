@@ -28,7 +28,9 @@
 # SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), SWEEP_VARIANTS, MORSEGS (a frozen binary for a run spread over days),
 # VARIANTS (the twelve above; --base, --variant-seeds, SWEEP_VARIANTS and FIRST keep the listed ones),
 # FIRST ("baseline,2dgs,mini-splatting,sugar,gaussianpro"), MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
-# runs and the estimated time, train nothing).
+# runs and the estimated time, train nothing), RECORDS (a folder kept in git: finished runs' records are restored from it
+# before the experiment starts and saved to it every 5 minutes and at the end, scripts/experiment_records.sh — a new
+# machine has no DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=${1:-exp-baselines}
@@ -72,7 +74,16 @@ sv=$(keep "${SWEEP_VARIANTS:-baseline,mini-splatting,morse-d}"); [ -n "$sv" ] &&
 # its own sweep (the knob the issue names), unless sweeps are off (SWEEP=none: experiment_30k.sh)
 has mini-splatting && [ "${SWEEP:-}" != none ] && extra+=(--knob mini-splatting=--simplify-fraction:0.5 --sweep-of mini-splatting=0.25,0.5,1.5,2)
 fv=$(keep "${FIRST:-baseline,2dgs,mini-splatting,sugar,gaussianpro}"); [ -n "$fv" ] && extra+=(--first "$fv")
-MGS_THREADS=${MGS_THREADS:-1} exec nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
+if [ -n "${RECORDS:-}" ]; then
+  scripts/experiment_records.sh restore "$RECORDS" "$dir/results"
+  if [ -z "${PLAN:-}" ]; then
+    scripts/experiment_records.sh watch "$dir/results" "$RECORDS" 300 &
+    watcher=$!
+    trap 'kill $watcher 2> /dev/null; scripts/experiment_records.sh save "$dir/results" "$RECORDS"' EXIT
+  fi
+fi
+run=exec; [ -n "${RECORDS:-}" ] && run=
+MGS_THREADS=${MGS_THREADS:-1} $run nice -n "${NICE:-10}" "$M" experiment "${data[@]}" -o "$dir/results" \
   --iters "$ITERS" --evals "$EVALS" --seeds "$SEEDS" --sweep "${SWEEP:-0.25,0.5,2,4}" --sweep-seeds "${SWEEP_SEEDS:-3}" \
   --train-arg=--schedule-scale="$SCALE" \
   --variant 2dgs="--model 2dgs" --variant 2dgs-morse-r="--model 2dgs --preset morse-r" \

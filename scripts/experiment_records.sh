@@ -47,7 +47,7 @@ case $cmd in
       sleep "${4:-300}"
     done ;;
   restore)
-    [ -d "$a" ] || die "$a: no such records folder"
+    [ -d "$a" ] || { echo "experiment_records.sh: no records folder $a yet: nothing restored (a new experiment)"; exit 0; }
     if [ -f "$a/experiment.json" ] && [ -f "$b/experiment.json" ] && ! cmp -s "$a/experiment.json" "$b/experiment.json"; then
       die "$b/experiment.json differs from $a/experiment.json: the records were made with other settings; restore into a new folder"
     fi

@@ -37,9 +37,11 @@ copy_runs() { # FROM TO ONLY_MISSING
 cmd=$1; a=${2%/}; b=${3%/}
 case $cmd in
   save|watch)
-    [ -d "$a/runs" ] || die "$a: no runs/ folder (not a morsegs experiment's -o folder)"
+    # watch starts with the experiment, before its first run folder exists
+    [ "$cmd" = watch ] || [ -d "$a/runs" ] || die "$a: no runs/ folder (not a morsegs experiment's -o folder)"
     mkdir -p "$b"
     while :; do
+      [ -d "$a/runs" ] || { sleep "${4:-300}"; continue; }
       [ -f "$a/experiment.json" ] && cp -p "$a/experiment.json" "$b/experiment.json"
       n=$(copy_runs "$a" "$b" 0)
       [ "$cmd" = save ] && { echo "saved $n new or changed runs of $a to $b"; break; }

@@ -32,6 +32,15 @@ def load(root):
         last = r["points"][-1]
         rec = dict(last)
         rec["train_cpu_seconds"] = r.get("train_cpu_seconds")
+        # signed offsets (+ outside the GT) from eval's own record of that point, when kept
+        ev = os.path.join(os.path.dirname(p), "eval_%s.json" % last.get("iteration"))
+        if os.path.exists(ev):
+            with open(ev) as f:
+                e = json.load(f).get("ours_%s" % last.get("iteration"), {})
+            g = e.get("geometry") or {}
+            rec["offset"] = g.get("offset")
+            rec["offset_fused"] = (g.get("fused") or {}).get("offset")
+            rec["offset_mesh"] = (g.get("sugar") or {}).get("offset")
         runs.setdefault((r["dataset"], r["variant"]), {})[r["seed"]] = rec
     return runs
 
@@ -89,6 +98,10 @@ def main():
         print("| %s | %d | %s | %s | %s | %s | %s | %d | %s | %s | %s | %s |" % (
             ds, n, f(al), f(fu), f(r, "%.2f"), "yes" if below else "no" if n else "-", "yes" if within else "no" if n else "-",
             n2, f(fu2), f(r2, "%.2f"), f(None if p2 is None else p2 - p3, "%+.2f dB"), "yes" if hold2 else "no" if n2 else "-"))
+    print("\nSigned offsets (mean signed distance to the GT, + outside; a shrink shows as about minus the Chamfer): "
+          + "; ".join("%s 3DGS alpha %s fused %s, 2DGS fused %s" % (
+              ds, f(paired(runs, ds, B, B, "offset")[0], "%+.4f"), f(paired(runs, ds, B, B, "offset_fused")[0], "%+.4f"),
+              f(paired(runs, ds, B, "2dgs", "offset_fused")[1], "%+.4f")) for ds in scenes))
     print("\n3DGS fused >= 40 %% below alpha: %d of %d scenes (target >= 3 of 5); within 20 %% of the better: %d of %d (target all); "
           "2DGS fused >= 25 %% below 3DGS with PSNR within 1 dB: %d of %d (target >= 3 of 5)\n" % (c40, tot, c20, tot, c2d, tot2))
 

@@ -224,8 +224,8 @@ static void test_same_as_reference(void) {
     fprintf(stderr, "  patch %d step %d, %d source(s), seed %llu: %zu of %zu pixels matched; differing depth %zu, normal %zu, cost %zu\n",
             cfg[t].patch, cfg[t].step, cfg[t].n_src, (unsigned long long)cfg[t].seed, matched, np, dd, dn, dc);
     CHECK(dd == 0 && dn == 0 && dc == 0);
-    /* a real match, and the black band left unmatched (a window of one non-zero grey is not
-     * "flat" to the weighted moments in float: their rounding exceeds the 1e-5 threshold) */
+    /* a real match, and the black band left unmatched (black: a window of some other single
+     * grey need not count as flat, the moments' float rounding can exceed the 1e-5 threshold) */
     CHECK(matched > np / 4 && matched < np - np / 5);
   }
   for (int k = 0; k < 2; k++) { free(d[k]); free(n[k]); free(c[k]); }

@@ -30,6 +30,7 @@ int mgs_bench_topo(int argc, char **argv);
 int mgs_bench_diagram(int argc, char **argv);
 int mgs_bench_scale(int argc, char **argv);
 int mgs_bench_mpi(int argc, char **argv);
+int mgs_bench_patchmatch(int argc, char **argv);
 /* `morsegs train` on a parsed config: the serial trainer, and `--mpi` (apps/cmd_train_mpi.c) */
 int mgs_cmd_train_config(mgs_train_config *c, const char *data);
 int mgs_cmd_train_mpi(mgs_train_config *c, const char *data);

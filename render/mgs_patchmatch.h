@@ -48,7 +48,8 @@ void mgs_pm_options_default(mgs_pm_options *o);
  * starting normal where its length exceeds 0.5 and it faces the camera, a random
  * camera-facing normal elsewhere. Outputs (each may be NULL): depth (camera z), normal
  * (world, unit, facing the camera), cost (0 perfect .. 2 no match). All maps have the
- * reference camera's size; each source image has its own camera's size. */
+ * reference camera's size; each source image has its own camera's size (at least 1 x 1,
+ * (w + 1)(h + 1) < 2^31). */
 mgs_status mgs_pm_run(const mgs_pm_view *ref, const mgs_pm_view *src, int n_src, const float *init_depth,
                       const float *init_normal, const mgs_pm_options *o, float *depth, float *normal,
                       float *cost, mgs_error *err);

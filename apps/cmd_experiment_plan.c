@@ -23,7 +23,9 @@ double exp_variant_cost_factor(const char *const *args) {
     const char *a = args[k], *next = args[k + 1] ? args[k + 1] : "";
     if (!strcmp(a, "--model") && !strcmp(next, "2dgs")) f *= 1.6;
     if (!strcmp(a, "--preset") && !strcmp(next, "sugar")) f *= 2.0;   /* 2.7× from its start at half the run */
-    if (!strcmp(a, "--strategy") && !strcmp(next, "gaussianpro")) f *= 1.3;
+    /* at the authors' patch-match settings (the bench's 1.3 was at reduced ones): 7.4× measured on a
+       7,500-iteration 200² run before patch matching became 4× faster; 2.6× expected since */
+    if (!strcmp(a, "--strategy") && !strcmp(next, "gaussianpro")) f *= 2.6;
     if (!strcmp(a, "--strategy") && !strncmp(next, "mini-splatting", 14)) f *= 0.7; /* fewer Gaussians after 1/6 */
     if (!strcmp(a, "--preset") && (!strcmp(next, "morse-full") || !strcmp(next, "morse-d"))) f *= 1.7;
     if (!strcmp(a, "--preset") && (!strcmp(next, "morse-r") || !strcmp(next, "morse-i") || !strcmp(next, "topology-gs")))

@@ -240,8 +240,17 @@ int main(void) {
     double p = train_eval(data, run, 0), pnp = train_eval(datanp, runnp, 1);
     fprintf(stderr, "T=(%g, %g, %g): test PSNR %.3f dB with points (centred %.3f), %.3f dB without (centred %.3f)\n", ts[i],
             ts[i], -ts[i], p, p0, pnp, p0np);
-    CHECK(fabs(p - p0) <= 0.1);
-    CHECK(fabs(pnp - p0np) <= 0.3);
+    /* One seed's PSNR moves with any perturbation of training (docs/notes/far-origin.md,
+     * "Over seeds": moving the centred folder by 1e-9 changed it by up to 0.15 dB with
+     * points and 0.30 without, 1e4 by up to 0.26 / 0.42; one run at 1e4 here missed 0.1 by
+     * 0.09 on a machine with another CPU). The issue's 0.1 / 0.3 dB are for the mean over
+     * seeds (scripts/bench_far_origin_seeds.sh). What this test guards against is the
+     * precision loss: the issue measured −4.6 dB at 1e5 with points, 12 dB against 38 at 1e4
+     * without; with the origin shift removed (mgs_origin_choose returning 0) this test's runs
+     * lose 0.46 dB at 1e5 and 1.30 at 1e6 with points — and fail the checks of the outputs
+     * below at every translation. ~3 standard deviations of the paired spread: */
+    CHECK_MSG(fabs(p - p0) <= 0.4, "moved %.3f dB, centred %.3f", p, p0);
+    CHECK_MSG(fabs(pnp - p0np) <= 0.8, "moved %.3f dB, centred %.3f (no points)", pnp, p0np);
     check_moved_outputs(run0, run, ts[i]);
     check_same_init(data0np, datanp, ts[i]);
     if (i != 1) { /* 1e4 and 1e6 are enough for the grids */

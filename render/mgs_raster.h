@@ -158,6 +158,13 @@ mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, 
  * rotations through the blending weights and the rotations through n_i (the smallest
  * axis: no derivative w.r.t. the scales that choose it nor the mean that turns it, see
  * render/raster_maps_backward.c); a backward not preceded by this call costs what it did. */
+/* Tells the context that the next forward will be followed by mgs_raster_maps(which): a
+ * surfel (2DGS) forward then writes its median depth, normal and distortion maps in its own
+ * pass instead of a second one (the same values, bit for bit; colour, alpha, depth and
+ * gradients unchanged). For that forward only; a 3DGS forward ignores it (its maps pass
+ * stays separate). Without the hint mgs_raster_maps still works, at one more pass. */
+void mgs_raster_hint_maps(mgs_raster *r, unsigned which);
+
 typedef struct mgs_raster_map_grad {
   float *depth_median, *normal, *distortion;
 } mgs_raster_map_grad;

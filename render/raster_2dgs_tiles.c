@@ -234,7 +234,7 @@ static void render_range_geo(void *ctx, size_t b, size_t e) {
   for (size_t t = b; t < e; t++) render_tile_impl(ctx, t, 1);
 }
 
-void mgs_raster2d_render_tiles(mgs_raster *r) {
+void mgs_raster2d_render_tiles(mgs_raster *r, int geo) {
   size_t nt = (size_t)r->tiles_x * r->tiles_y;
   /* the row masks for the backward (every intersection it visits, the forward visited);
      without the memory the backward recomputes them */
@@ -245,12 +245,15 @@ void mgs_raster2d_render_tiles(mgs_raster *r) {
     r->s_rows = q;
     r->cap_srows = q ? c : 0;
   }
-  mgs_parallel_for(0, nt, 1, render_range, r);
+  /* with geo the one pass also writes the maps: the same alpha decisions and sums, so
+     colour, alpha and depth are bit for bit those of the pass without, and the maps those
+     of mgs_raster2d_geometry's second pass, which is then skipped */
+  mgs_parallel_for(0, nt, 1, geo ? render_range_geo : render_range, r);
   double ev = 0;
   for (size_t t = 0; t < nt; t++) ev += r->tile_evals[t];
   r->evals_fwd = ev * 16.0;
   r->s_grad_live = 0;
-  r->s_geo = 0;
+  r->s_geo = geo;
 }
 
 void mgs_raster2d_geometry(mgs_raster *r) {

@@ -199,6 +199,9 @@ static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camer
                          s->sh_degree, g->sh_degree);
   if (g->n > UINT32_MAX - 1)
     return mgs_error_set(err, MGS_ERR_ARG, "render/raster_forward.c: %zu Gaussians exceed the 2^32 limit", g->n);
+  /* a hint is for this forward only (mgs_raster_hint_maps) */
+  const int geo = (r->hint_maps & (MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION)) != 0;
+  r->hint_maps = 0;
   r->have_forward = 0;
   r->bwd_kind = 0;
   r->map_gn_valid = 0;
@@ -224,7 +227,7 @@ static mgs_status forward(mgs_raster *r, const mgs_gaussians *g, const mgs_camer
   st = mgs_raster_bin(r, err);
   if (st != MGS_OK) return st;
   double t2 = mgs_now(), c2 = mgs_raster_cpu_now();
-  if (r->surfel) mgs_raster2d_render_tiles(r);
+  if (r->surfel) mgs_raster2d_render_tiles(r, geo);
   else mgs_raster_render_tiles(r);
   double t3 = mgs_now(), c3 = mgs_raster_cpu_now();
   r->prof.project_ms = (t1 - t0) * 1e3;

@@ -106,6 +106,7 @@ struct mgs_raster {
   int32_t *s_medid;        /* 1-based tile-list position of the median contributor, 0: none */
   float *s_gmed, *s_gnormal, *s_gdist; /* dL/d(maps), handed out by mgs_raster_map_grads */
   int s_grad_live;         /* the map gradients were handed out since the forward */
+  unsigned hint_maps;      /* maps the caller will ask of the next forward (mgs_raster_hint_maps) */
   int s_geo;               /* the geometry pass (normal, median, distortion) ran since the forward */
   /* blending statistics (raster_blend.c), allocated on the first request only */
   struct mgs_raster_blend_buf *blend;
@@ -162,7 +163,7 @@ void mgs_raster_blend_free(mgs_raster *r);
  * all), compositing, backward and maps */
 mgs_status mgs_raster2d_reserve(mgs_raster *r, size_t n, size_t pix, mgs_error *err);
 void mgs_raster2d_project(mgs_raster *r, const uint32_t *idx, size_t m);
-void mgs_raster2d_render_tiles(mgs_raster *r);
+void mgs_raster2d_render_tiles(mgs_raster *r, int geo); /* geo: also the geometry maps (s_geo) */
 void mgs_raster2d_geometry(mgs_raster *r); /* the normal/median/distortion pass, once per forward */
 mgs_status mgs_raster2d_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha,
                                        const float *dL_ddepth, mgs_error *err);

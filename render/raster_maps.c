@@ -107,6 +107,10 @@ static void maps_range(void *vctx, size_t b, size_t e) {
   for (size_t t = b; t < e; t++) maps_tile(c->r, t, !!(c->which & MGS_MAP_NORMAL), !!(c->which & MGS_MAP_DEPTH_MEDIAN));
 }
 
+void mgs_raster_hint_maps(mgs_raster *r, unsigned which) {
+  if (r) r->hint_maps = which;
+}
+
 mgs_status mgs_raster_maps(mgs_raster *r, unsigned which, mgs_render_maps *out, mgs_error *err) {
   if (!r || !out) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: NULL argument");
   if (!r->have_forward) return mgs_error_set(err, MGS_ERR_ARG, "render/raster_maps.c: no forward pass on this context");

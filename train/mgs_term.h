@@ -52,7 +52,10 @@ typedef struct mgs_term_step {
 
 typedef struct mgs_term_ops {
   const char *name;             /* also the checkpoint's key for its state (< 32 chars) */
-  /* Which hooks run in this iteration: MGS_TERM_IMAGE | MGS_TERM_MODEL bits (0: none). */
+  /* Which hooks run in this iteration: MGS_TERM_IMAGE | MGS_TERM_MODEL bits (0: none);
+     with MGS_TERM_MAPS the image hook reads the geometry maps (mgs_raster_maps), and the
+     trainer asks the forward for them ahead (mgs_raster_hint_maps). A function of the
+     iteration only: the trainer calls it before the forward and again after. */
   unsigned (*active)(void *self, int iteration);
   mgs_status (*image_grad)(void *self, mgs_term_step *s, mgs_error *err);
   mgs_status (*model_grad)(void *self, mgs_term_step *s, mgs_error *err);
@@ -61,7 +64,7 @@ typedef struct mgs_term_ops {
   void (*destroy)(void *self);
 } mgs_term_ops;
 
-enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u };
+enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u, MGS_TERM_MAPS = 4u };
 
 typedef struct mgs_term {
   const mgs_term_ops *ops;

@@ -22,7 +22,7 @@ typedef struct t2d {
 static unsigned t2d_active(void *self, int it) {
   const t2d *t = self;
   int on = (t->o.lambda_dist > 0 && it >= t->o.dist_from) || (t->o.lambda_normal > 0 && it >= t->o.normal_from);
-  return on ? MGS_TERM_IMAGE : 0u;
+  return on ? MGS_TERM_IMAGE | MGS_TERM_MAPS : 0u;
 }
 
 /* The normal of the depth's surface at interior pixel p and its backward: c = dx x dy with

@@ -287,6 +287,12 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   t->rs.sh_degree = t->active_sh;
   mgs_raster_output ro;
   t->raster_n = t->g->n;
+  if (it < o->iterations && !o->freeze) { /* terms run in this iteration (step_opt below) */
+    unsigned maps = 0;
+    for (size_t k = 0; k < t->n_terms; k++)
+      if (t->terms[k]->ops->active) maps |= t->terms[k]->ops->active(t->terms[k]->self, it) & MGS_TERM_MAPS;
+    if (maps) mgs_raster_hint_maps(t->raster, MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION);
+  }
   mgs_status st = mgs_trainer_large_forward(t, &v->cam, &ro, err);
   if (st) return st;
   double t1 = mgs_now();

@@ -577,7 +577,83 @@ static void test_lanes(void) {
   lanes_case(far);
 }
 
+/* One forward (+ maps, + backward through every map) of c into copies: hinted or not. */
+typedef struct hint_run {
+  float *color, *alpha, *depth, *median, *normal, *dist;
+  mgs_gaussians *grad;
+} hint_run;
+
+static void run_hinted(fd_case *c, int hint, hint_run *h) {
+  size_t np = (size_t)c->cam.width * c->cam.height;
+  mgs_raster_output out;
+  mgs_render_maps mp;
+  mgs_error err;
+  if (hint) mgs_raster_hint_maps(c->r, MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION);
+  CHECK_OK(mgs_raster_forward(c->r, c->g, &c->cam, &c->s, &out, &err), &err);
+  CHECK_OK(mgs_raster_maps(c->r, MGS_MAP_DEPTH_MEDIAN | MGS_MAP_NORMAL | MGS_MAP_DISTORTION, &mp, &err), &err);
+#define KEEP(dst, src, k) do { dst = malloc((k) * np * sizeof(float)); memcpy(dst, src, (k) * np * sizeof(float)); } while (0)
+  KEEP(h->color, out.color, 3); KEEP(h->alpha, out.alpha, 1); KEEP(h->depth, out.depth, 1);
+  KEEP(h->median, mp.depth_median, 1); KEEP(h->normal, mp.normal, 3); KEEP(h->dist, mp.distortion, 1);
+#undef KEEP
+  mgs_raster_map_grad mg;
+  CHECK_OK(mgs_raster_map_grads(c->r, &mg, &err), &err);
+  memcpy(mg.depth_median, c->wm, np * sizeof(float));
+  memcpy(mg.normal, c->wn, 3 * np * sizeof(float));
+  memcpy(mg.distortion, c->wdist, np * sizeof(float));
+  h->grad = zero_like(c->g);
+  float *gm2d = calloc(c->g->n, sizeof(float));
+  CHECK_OK(mgs_raster_backward(c->r, c->wc, c->wa, c->wd, h->grad, gm2d, &err), &err);
+  free(gm2d);
+}
+
+static void free_hint_run(hint_run *h) {
+  free(h->color); free(h->alpha); free(h->depth); free(h->median); free(h->normal); free(h->dist);
+  mgs_gaussians_destroy(h->grad);
+}
+
+/* The maps hint (mgs_raster_hint_maps): a forward told ahead writes the geometry maps in
+ * its own pass; everything (image, maps, every gradient group) must equal, bit for bit,
+ * the unhinted forward followed by the separate maps pass. The hint lasts one forward. */
+static void test_hint_maps(void) {
+  fd_case c;
+  random_case(&c, 71, 3, 160);
+  size_t np = (size_t)c.cam.width * c.cam.height, n = c.g->n;
+  hint_run a, b, d;
+  run_hinted(&c, 0, &a);
+  run_hinted(&c, 1, &b);
+  run_hinted(&c, 1, &d); /* hinted again */
+  /* then unhinted on a moved model: the hint's maps are stale and must not be handed out
+     (the maps pass has to run again); the reference is a fresh context's */
+  for (size_t i = 0; i < 3 * n; i++) c.g->mean[i] += 0.01f;
+  hint_run moved, moved_ref;
+  run_hinted(&c, 0, &moved);
+  mgs_raster *keep = c.r;
+  c.r = mgs_raster_create();
+  run_hinted(&c, 0, &moved_ref);
+  mgs_raster_destroy(c.r);
+  c.r = keep;
+#define SAME(x, y, k) (memcmp(x, y, (k) * np * sizeof(float)) == 0)
+  CHECK_MSG(SAME(a.color, b.color, 3) && SAME(a.alpha, b.alpha, 1) && SAME(a.depth, b.depth, 1), "hinted image differs");
+  CHECK_MSG(SAME(a.median, b.median, 1) && SAME(a.normal, b.normal, 3) && SAME(a.dist, b.dist, 1), "hinted maps differ");
+  CHECK_MSG(SAME(a.median, d.median, 1) && SAME(a.normal, d.normal, 3), "second hinted forward's maps differ");
+  CHECK_MSG(SAME(moved.median, moved_ref.median, 1) && SAME(moved.normal, moved_ref.normal, 3) && SAME(moved.dist, moved_ref.dist, 1),
+            "an unhinted forward after a hinted one handed out stale maps");
+  CHECK_MSG(!SAME(moved.median, a.median, 1), "moving the model did not change the median map (the check above is void)");
+#undef SAME
+  size_t nz = 0;
+  for (int grp = 0; grp < MGS_PARAM_COUNT; grp++) {
+    size_t k = n * mgs_param_dim((mgs_param_group)grp);
+    const float *ga = mgs_gaussians_group(a.grad, (mgs_param_group)grp), *gb = mgs_gaussians_group(b.grad, (mgs_param_group)grp);
+    CHECK_MSG(memcmp(ga, gb, k * sizeof(float)) == 0, "hinted gradient of group %d differs", grp);
+    for (size_t i = 0; i < k; i++) nz += ga[i] != 0;
+  }
+  CHECK_MSG(nz > n, "only %zu nonzero gradients: the comparison is void", nz);
+  free_hint_run(&a); free_hint_run(&b); free_hint_run(&d); free_hint_run(&moved); free_hint_run(&moved_ref);
+  free_case(&c);
+}
+
 int main(void) {
+  RUN(test_hint_maps);
   RUN(test_forward_vs_ray);
   RUN(test_fd_sh_degrees);
   RUN(test_fd_edge_on);

@@ -76,11 +76,22 @@ MGS_VINLINE void mgs_blend_tile_store(const v16f *T, const v16i *imax, int x0, i
   }
 }
 
-#if defined(MGS_HALF_ROWS)
+#if defined(MGS_HALF_ROWS) || defined(MGS_ROWS8)
 MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
   float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;
   return v8f_fma(v8f_fma(v8f_set1(-0.5f * sp->A), dx, v8f_set1(bdy)), dx, v8f_set1(hc));
 }
+#endif
+
+#if defined(MGS_ROWS8)
+/* A power below this gives opacity * exp_neg(power) < 1/255 for certain, so a pixel there
+ * takes nothing from the Gaussian: log((1/255) / opacity) less a margin (2 %) far above
+ * the rounding of the log, the exp and the product (~1e-6). The kernels skip a half row
+ * whose every pixel is below it before any exp(); NaN (no power is below it) skips
+ * nothing. */
+MGS_VINLINE float mgs_power_floor(float opacity) { return logf(MGS_ALPHA_MIN / opacity) - 0.02f; }
+/* Every lane of a 16-lane mask row set (two halves: no 64-byte compare on AVX2). */
+MGS_VINLINE int mgs_row_all8(const v16i *row) { return !v8i_any(~(v8i_half(row, 0) & v8i_half(row, 8))); }
 #endif
 
 /* The half of a tile (first column 0 or 8) holding every column of the tile starting at

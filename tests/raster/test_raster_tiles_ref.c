@@ -10,7 +10,7 @@
 #include <stdio.h>
 #include "mgs_test.h"
 #include "raster_test_util.h"
-#include "render/raster_internal.h"
+#include "render/raster_kernel.h"
 
 void ref_render_tiles(mgs_raster *r);
 void ref_backward_tiles(mgs_raster *r, const float *dL_dcolor, const float *dL_dalpha, const float *dL_ddepth,
@@ -152,7 +152,43 @@ static void test_same_as_reference(void) {
     for (uint64_t seed = 1; seed <= 3; seed++) run_case(&cases[k], 100 * k + seed);
 }
 
+/* The kernels' power floor (MGS_ROWS8 builds): below it, opacity * exp() < 1/255 for
+ * certain. Every 16th float opacity of [1/255, 256/255) (the inline bound) and a few
+ * outside (the log): at least 0.019 under log((1/255) / opacity) in double, and the
+ * kernels' own exp at the floor times the opacity under 1/255. */
+static void test_power_floor(void) {
+#if defined(MGS_ROWS8)
+  float lo = MGS_ALPHA_MIN;
+  uint32_t b;
+  memcpy(&b, &lo, sizeof b);
+  size_t n = 0, bad = 0;
+  double worst = 1.0;
+  for (;; b += 16) {
+    float op;
+    memcpy(&op, &b, sizeof op);
+    if (op * 255.0f >= 256.0f) break;
+    float f = mgs_power_floor(op);
+    double margin = log((double)MGS_ALPHA_MIN / op) - f;
+    float a = op * v8f_exp_neg(v8f_set1(f))[0];
+    if (!(margin >= 0.019) || !(a < MGS_ALPHA_MIN)) bad++;
+    if (margin < worst) worst = margin;
+    n++;
+  }
+  const float other[4] = {1.5f, 1e30f, 0.001f, 1e-30f};
+  for (int k = 0; k < 4; k++) {
+    float f = mgs_power_floor(other[k]);
+    if (!(log((double)MGS_ALPHA_MIN / other[k]) - f >= 0.019)) bad++;
+  }
+  fprintf(stderr, "  %zu opacities, smallest margin %.6f\n", n, worst);
+  CHECK_MSG(bad == 0, "%zu opacities with the power floor too high", bad);
+  CHECK(isnan(mgs_power_floor(NAN)));
+#else
+  CHECK(1); /* the 16-lane kernels have no floor */
+#endif
+}
+
 int main(void) {
+  RUN(test_power_floor);
   RUN(test_same_as_reference);
   return mgs_test_finish();
 }

@@ -88,7 +88,7 @@ MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
  * takes nothing from the Gaussian: at most log((1/255) / opacity) = -log(255 opacity), less
  * a margin (0.02) far above the rounding of the bound, the exp and the product (~1e-6).
  * The kernels skip a half row whose every pixel is below it before any exp(). For
- * opacities in [1/255, 256/255] log(x = 255 opacity) is bounded above inline (no libm call
+ * opacities in [1/255, 256/255) log(x = 255 opacity) is bounded above inline (no libm call
  * in the tile loops, whose vector registers it would spill): x = 2^e (1 + t), t in [0, 1),
  * log x <= e log 2 + t - t^2/2 + t^3/3 (the series alternates), at most 0.14 too high, a
  * slightly lower floor. Else the log itself (NaN: no power is below it, nothing skipped). */

@@ -16,6 +16,132 @@ typedef struct bwd_ctx {
   float *grad_mean2d;
 } bwd_ctx;
 
+/* |x| <= 1e15 (not NaN). With every pixel input and splat value that small, every product
+ * the backward forms on a pixel that takes no weight from a Gaussian is finite, so that
+ * pixel adds exactly zero to every sum and skipping it changes no bit; otherwise the
+ * backward evaluates every half row as before (MGS_ROWS8). */
+static inline int bwd_tame(float x) { return fabsf(x) <= 1e15f; }
+#if defined(MGS_ROWS8)
+static inline int bwd_splat_tame(const mgs_splat *sp, const float *gn) {
+  v8f a = v8f_half(&sp->u, 0), b = v8f_half(&sp->u, 4); /* u .. rgb[1], C .. rx */
+  v8i big = (v8f_max(a, -a) > v8f_set1(1e15f)) | (v8f_max(b, -b) > v8f_set1(1e15f)) | (a != a) | (b != b);
+  if (v8i_any(big)) return 0;
+  return !gn || (bwd_tame(gn[0]) && bwd_tame(gn[1]) && bwd_tame(gn[2]));
+}
+
+/* One Gaussian (tile-list position jj) over rows [lo, hi] of its tile, as the 16-lane loop
+ * of backward_tile_impl does it, in 8-lane halves. A half is skipped where each pixel is
+ * below the power floor (mgs_power_floor) or behind its last contributor with a power < 64
+ * (exp() finite there): those pixels take no weight, and with tame inputs add exact zeros
+ * in the 16-lane loop (without them every half is evaluated). A row is skipped when no
+ * pixel takes weight (as before). Each lane sums its rows in the same order, and the
+ * horizontal sums add lanes 0..15 in order as v16f_sum does (a half never evaluated holds
+ * +0s, which leave the sum unchanged: no sum here is ever -0). gn: the Gaussian's normal
+ * (nrm) or NULL. Writes the slot; returns the rows evaluated. */
+static inline __attribute__((always_inline)) uint32_t bwd_splat8(
+    const mgs_splat *sp, const float *gn, int32_t jj, const v16f *xs, int y0, int lo, int hi, int tame,
+    const int32_t *rowmax, v16f *T, v16f *S, const v16f *K, const v16f *G0, const v16f *G1, const v16f *G2,
+    const v16f *GD, const v16f *GN0, const v16f *GN1, const v16f *GN2, const v16i *NC, float *out) {
+  enum { NCH = GS_NZ + 1 };
+  const int nch = gn ? GS_NZ + 1 : GS_N;
+  const v8f amax = v8f_set1(MGS_ALPHA_MAX), amin = v8f_set1(MGS_ALPHA_MIN);
+  const v8f one = v8f_set1(1.0f), zero = v8f_set1(0.0f);
+  const int skip = tame && bwd_splat_tame(sp, gn);
+  /* -inf: nothing compares below, every half is evaluated */
+  const v8f floor = v8f_set1(skip ? mgs_power_floor(sp->opacity) : -INFINITY);
+  const v8f pmax = v8f_set1(skip ? 64.0f : -INFINITY);
+  v8f dx[2], Adx[2], Bdx[2], dx2[2];
+  v8f op = v8f_set1(sp->opacity);
+  v8f A = v8f_set1(sp->A), B = v8f_set1(sp->B), C = v8f_set1(sp->C);
+  for (int h = 0; h < 2; h++) {
+    dx[h] = v8f_half(xs, 8 * h) - v8f_set1(sp->u);
+    Adx[h] = A * dx[h]; Bdx[h] = B * dx[h]; dx2[h] = dx[h] * dx[h];
+  }
+  v8f cr = v8f_set1(sp->rgb[0]), cg = v8f_set1(sp->rgb[1]), cb = v8f_set1(sp->rgb[2]), cz = v8f_set1(sp->z);
+  v8f nx = zero, ny = zero, nz = zero;
+  if (gn) { nx = v8f_set1(gn[0]); ny = v8f_set1(gn[1]); nz = v8f_set1(gn[2]); }
+  v8i jid = v8i_set1(jj);
+  v8f ac[2][NCH];
+  for (int h = 0; h < 2; h++)
+    for (int c = 0; c < NCH; c++) ac[h][c] = zero;
+  int used[2] = {0, 0};
+  uint32_t evals = 0;
+  for (int y = lo; y <= hi; y++) {
+    if (jj >= rowmax[y]) continue; /* behind every last contributor of the row */
+    evals++;
+    float dyf = (float)(y0 + y) + 0.5f - sp->v;
+    v8f G[2] = {zero, zero}, raw[2] = {zero, zero}, alpha[2] = {zero, zero};
+    v8i m[2] = {v8i_set1(0), v8i_set1(0)};
+    int go[2], anym = 0;
+    for (int h = 0; h < 2; h++) {
+      v8f power = mgs_row_power8(sp, dx[h], dyf);
+      v8i live = jid < v8i_half(&NC[y], 8 * h);
+      go[h] = v8i_any(~((power < floor) | (~live & (power < pmax))));
+      if (!go[h]) continue;
+      G[h] = v8f_exp_neg(power);
+      raw[h] = op * G[h];
+      alpha[h] = v8f_min(amax, raw[h]);
+      m[h] = (power <= zero) & (alpha[h] >= amin) & live;
+      anym |= v8i_any(m[h]);
+    }
+    if (!anym) continue;
+    v8f dy = v8f_set1(dyf);
+    for (int h = 0; h < 2; h++) {
+      if (!go[h]) continue;
+      const int o = 8 * h;
+      used[h] = 1;
+      v8f *a = ac[h];
+      v8f inv = v8f_rcp(one - alpha[h]);
+      v8f Ty = v8f_half(&T[y], o);
+      v8f Tn = v8f_select(m[h], Ty * inv, Ty);
+      v8f_put(&T[y], o, Tn);
+      v8f wgt = v8f_and(m[h], alpha[h] * Tn);
+      v8f g0 = v8f_half(&G0[y], o), g1 = v8f_half(&G1[y], o), g2 = v8f_half(&G2[y], o), gd = v8f_half(&GD[y], o);
+      a[GS_R] = v8f_fma(wgt, g0, a[GS_R]); a[GS_G] = v8f_fma(wgt, g1, a[GS_G]);
+      a[GS_B] = v8f_fma(wgt, g2, a[GS_B]); a[GS_Z] = v8f_fma(wgt, gd, a[GS_Z]);
+      v8f val = v8f_fma(cr, g0, v8f_fma(cg, g1, v8f_fma(cb, g2, cz * gd)));
+      if (gn) {
+        v8f n0 = v8f_half(&GN0[y], o), n1 = v8f_half(&GN1[y], o), n2 = v8f_half(&GN2[y], o);
+        val = v8f_fma(nx, n0, v8f_fma(ny, n1, v8f_fma(nz, n2, val)));
+        a[GS_NX] = v8f_fma(wgt, n0, a[GS_NX]); a[GS_NY] = v8f_fma(wgt, n1, a[GS_NY]);
+        a[GS_NZ] = v8f_fma(wgt, n2, a[GS_NZ]);
+      }
+      v8f Sy = v8f_half(&S[y], o);
+      v8f dLda = Tn * val - (Sy + v8f_half(&K[y], o)) * inv;
+      v8f_put(&S[y], o, v8f_fma(val, wgt, Sy));
+      dLda = v8f_and(m[h] & (raw[h] < amax), dLda);
+      a[GS_OP] = v8f_fma(G[h], dLda, a[GS_OP]);
+      v8f gG = op * dLda * G[h];
+      a[GS_U] = v8f_fma(gG, v8f_fma(B, dy, Adx[h]), a[GS_U]);
+      a[GS_V] = v8f_fma(gG, v8f_fma(C, dy, Bdx[h]), a[GS_V]);
+      a[GS_A] = v8f_fma(gG, dx2[h], a[GS_A]);
+      a[GS_B2] = v8f_fma(gG, dx[h] * dy, a[GS_B2]);
+      a[GS_C] = v8f_fma(gG, dy * dy, a[GS_C]);
+    }
+  }
+  /* v16f_sum's order: lane 0 to 15 */
+  float sums[16] = {0};
+  for (int c = 0; c < nch; c++) {
+    float s = 0.0f;
+    for (int h = 0; h < 2; h++) {
+      if (!used[h]) continue;
+      float t[8];
+      memcpy(t, &ac[h][c], sizeof t);
+      for (int i = 0; i < 8; i++) s += t[i];
+    }
+    sums[c] = s;
+  }
+  /* dG/dA = -G dx^2/2, dG/dB = -G dx dy, dG/dC = -G dy^2/2 */
+  v8f fac = one;
+  fac[GS_A] = -0.5f;
+  v8f fac1 = one;
+  fac1[GS_B2 - 8] = -1.0f; fac1[GS_C - 8] = -0.5f;
+  v8f_put(out, 0, v8f_half(sums, 0) * fac);
+  v8f_put(out, 8, v8f_half(sums, 8) * fac1);
+  return evals;
+}
+#endif
+
 /* Per pixel, with val_i = c_i.dL/dcolor + z_i dL/ddepth (the Gaussian's value seen through
  * the pixel's output gradient) and S_i = sum_{j>i} val_j alpha_j T_j (what lies behind i):
  *   dL/dalpha_i = T_i val_i - (S_i + T_final (bg.dL/dcolor - dL/dalpha_out)) / (1 - alpha_i)
@@ -40,6 +166,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
   v16i NC[MGS_TILE_SIZE];
   const float *bg = r->s.background;
   int32_t maxn = 0, rowmax[MGS_TILE_SIZE];
+  int tame = 1; /* every pixel's output gradient of modest size (bwd_tame) */
   for (int y = 0; y < MGS_TILE_SIZE; y++) {
     float tf[16], g0[16], g1[16], g2[16], gd[16], k[16], gn[3][16];
     int32_t nc[16];
@@ -58,6 +185,8 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
         gd[x] = bc->dL_ddepth ? bc->dL_ddepth[p + x] : 0.0f;
         if (nrm)
           for (int c = 0; c < 3; c++) gn[c][x] = bc->dL_dnormal[3 * (p + x) + c];
+        tame &= bwd_tame(g0[x]) & bwd_tame(g1[x]) & bwd_tame(g2[x]) & bwd_tame(gd[x]);
+        if (nrm) tame &= bwd_tame(gn[0][x]) & bwd_tame(gn[1][x]) & bwd_tame(gn[2][x]);
         /* colour = ... + T_final bg, alpha_out = 1 - T_final: both through T_final */
         k[x] = tf[x] * (bg[0] * dc[0] + bg[1] * dc[1] + bg[2] * dc[2] - (bc->dL_dalpha ? bc->dL_dalpha[p + x] : 0.0f));
       }
@@ -71,6 +200,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     rowmax[y] = 0;
     for (int x = 0; x < 16; x++) rowmax[y] = nc[x] > rowmax[y] ? nc[x] : rowmax[y];
   }
+  (void)tame;
   v16f xs;
   for (int i = 0; i < 16; i++) xs[i] = (float)(x0 + i) + 0.5f;
   const v16f amax = v16f_set1(MGS_ALPHA_MAX), amin = v16f_set1(MGS_ALPHA_MIN);
@@ -92,6 +222,11 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
     int lo, hi;
     mgs_row_range(sp, y0, nrows, &lo, &hi);
     if (hi < lo) { v16f_store(out, zero); continue; }
+#if defined(MGS_ROWS8)
+    evals += bwd_splat8(sp, nrm ? r->map_gnormal + 3 * (size_t)r->isect_idx[j] : NULL, (int32_t)(j - start), &xs,
+                        y0, lo, hi, tame, rowmax, T, S, K, G0, G1, G2, GD, GN0, GN1, GN2, NC, out);
+    continue;
+#endif
     v16f dx = xs - v16f_set1(sp->u);
     v16f op = v16f_set1(sp->opacity);
     v16f A = v16f_set1(sp->A), B = v16f_set1(sp->B), C = v16f_set1(sp->C);

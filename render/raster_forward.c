@@ -68,6 +68,59 @@ static inline __attribute__((always_inline)) int fwd_row8(const mgs_splat *sp, v
 }
 #endif
 
+#if defined(MGS_ROWS8)
+/* fwd_row on half o (0 or 8) of row y, its power given. */
+static inline __attribute__((always_inline)) void fwd_half(v8f power, v8f op, v8f cr, v8f cg, v8f cb, v8f cz, v8i jid,
+                                                           int y, int o, v16f *T, v16f *C0, v16f *C1, v16f *C2,
+                                                           v16f *D, v16i *NC, v16i *DONE, int *rowdone) {
+  const v8f amax = v8f_set1(MGS_ALPHA_MAX), amin = v8f_set1(MGS_ALPHA_MIN), tmin = v8f_set1(MGS_T_MIN);
+  const v8f one = v8f_set1(1.0f), zero = v8f_set1(0.0f);
+  v8f alpha = v8f_min(amax, op * v8f_exp_neg(power));
+  v8i done = v8i_half(&DONE[y], o);
+  v8i m = (power <= zero) & (alpha >= amin) & ~done;
+  v8f Ty = v8f_half(&T[y], o);
+  v8f testT = Ty * (one - alpha);
+  v8i nd = m & (testT < tmin);
+  if (v8i_any(nd)) {
+    v8i_put(&DONE[y], o, done | nd);
+    rowdone[y] = mgs_row_all8(&DONE[y]);
+  }
+  m &= ~nd;
+  v8f w = v8f_and(m, alpha * Ty);
+  v8f_put(&C0[y], o, v8f_fma(w, cr, v8f_half(&C0[y], o)));
+  v8f_put(&C1[y], o, v8f_fma(w, cg, v8f_half(&C1[y], o)));
+  v8f_put(&C2[y], o, v8f_fma(w, cb, v8f_half(&C2[y], o)));
+  v8f_put(&D[y], o, v8f_fma(w, cz, v8f_half(&D[y], o)));
+  v8f_put(&T[y], o, v8f_select(m, testT, Ty));
+  v8i_put(&NC[y], o, (m & jid) | (~m & v8i_half(&NC[y], o)));
+}
+
+/* Rows [lo, hi] of the tile blended with sp, as fwd_row does them, in 8-lane halves; a
+ * half whose pixels are all terminated or below the power floor is skipped (nothing there
+ * changes: its pixels take no weight). Returns the rows evaluated (as fwd_row counts). */
+static inline __attribute__((always_inline)) uint32_t fwd_rows8(const mgs_splat *sp, const v16f *xs, int32_t jid1,
+                                                                int y0, int lo, int hi, v16f *T, v16f *C0, v16f *C1,
+                                                                v16f *C2, v16f *D, v16i *NC, v16i *DONE,
+                                                                int *rowdone) {
+  v8f dx0 = v8f_half(xs, 0) - v8f_set1(sp->u), dx1 = v8f_half(xs, 8) - v8f_set1(sp->u);
+  v8f op = v8f_set1(sp->opacity), floor = v8f_set1(mgs_power_floor(sp->opacity));
+  v8f cr = v8f_set1(sp->rgb[0]), cg = v8f_set1(sp->rgb[1]), cb = v8f_set1(sp->rgb[2]), cz = v8f_set1(sp->z);
+  v8i jid = v8i_set1(jid1);
+  uint32_t evals = 0;
+  for (int y = lo; y <= hi; y++) {
+    if (rowdone[y]) continue;
+    evals++;
+    float dy = (float)(y0 + y) + 0.5f - sp->v;
+    v8f p0 = mgs_row_power8(sp, dx0, dy), p1 = mgs_row_power8(sp, dx1, dy);
+    if (v8i_any(~((p0 < floor) | v8i_half(&DONE[y], 0))))
+      fwd_half(p0, op, cr, cg, cb, cz, jid, y, 0, T, C0, C1, C2, D, NC, DONE, rowdone);
+    if (v8i_any(~((p1 < floor) | v8i_half(&DONE[y], 8))))
+      fwd_half(p1, op, cr, cg, cb, cz, jid, y, 8, T, C0, C1, C2, D, NC, DONE, rowdone);
+  }
+  return evals;
+}
+#endif
+
 static void render_tile(mgs_raster *r, size_t tile) {
   const int W = r->width, H = r->height;
   int tx = (int)(tile % (size_t)r->tiles_x), ty = (int)(tile / (size_t)r->tiles_x);
@@ -97,6 +150,9 @@ static void render_tile(mgs_raster *r, size_t tile) {
     const mgs_splat *sp = &r->splat[r->isect_idx[j]];
     int lo, hi;
     mgs_row_range(sp, y0, nrows, &lo, &hi);
+#if defined(MGS_ROWS8)
+    evals += fwd_rows8(sp, &xs, (int32_t)(j - start + 1), y0, lo, hi, T, C0, C1, C2, D, NC, DONE, rowdone);
+#else
     int y = lo;
 #if defined(MGS_HALF_ROWS)
     int h = mgs_col_half(sp, x0);
@@ -124,6 +180,7 @@ static void render_tile(mgs_raster *r, size_t tile) {
       }
       if (y == hi) evals += (uint32_t)fwd_row(sp, dx, op, cr, cg, cb, cz, jid, y0, y, T, C0, C1, C2, D, NC, DONE, rowdone);
     }
+#endif
     /* every 32 Gaussians: stop when every pixel of the tile has terminated */
     if (((j - start) & 31) == 31) {
       v16i all = DONE[0];

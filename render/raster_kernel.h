@@ -76,11 +76,35 @@ MGS_VINLINE void mgs_blend_tile_store(const v16f *T, const v16i *imax, int x0, i
   }
 }
 
-#if defined(MGS_HALF_ROWS)
+#if defined(MGS_HALF_ROWS) || defined(MGS_ROWS8)
 MGS_VINLINE v8f mgs_row_power8(const mgs_splat *sp, v8f dx, float dy) {
   float hc = -0.5f * sp->C * dy * dy, bdy = -sp->B * dy;
   return v8f_fma(v8f_fma(v8f_set1(-0.5f * sp->A), dx, v8f_set1(bdy)), dx, v8f_set1(hc));
 }
+#endif
+
+#if defined(MGS_ROWS8)
+/* A power below this gives opacity * exp_neg(power) < 1/255 for certain, so a pixel there
+ * takes nothing from the Gaussian: at most log((1/255) / opacity) = -log(255 opacity), less
+ * a margin (0.02) far above the rounding of the bound, the exp and the product (~1e-6).
+ * The kernels skip a half row whose every pixel is below it before any exp(). For
+ * opacities in [1/255, 256/255) log(x = 255 opacity) is bounded above inline (no libm call
+ * in the tile loops, whose vector registers it would spill): x = 2^e (1 + t), t in [0, 1),
+ * log x <= e log 2 + t - t^2/2 + t^3/3 (the series alternates), at most 0.14 too high, a
+ * slightly lower floor. Else the log itself (NaN: no power is below it, nothing skipped). */
+MGS_VINLINE float mgs_power_floor(float opacity) {
+  float x = opacity * 255.0f;
+  if (!(x >= 1.0f && x < 256.0f)) return logf(MGS_ALPHA_MIN / opacity) - 0.02f;
+  uint32_t b;
+  memcpy(&b, &x, sizeof b);
+  uint32_t mb = (b & 0x7fffffu) | 0x3f800000u;
+  float m;
+  memcpy(&m, &mb, sizeof m);
+  float t = m - 1.0f, e = (float)((int)(b >> 23) - 127);
+  return -(e * 0.693147182f + t * (1.0f + t * (-0.5f + t * (1.0f / 3.0f)))) - 0.02f;
+}
+/* Every lane of a 16-lane mask row set (two halves: no 64-byte compare on AVX2). */
+MGS_VINLINE int mgs_row_all8(const v16i *row) { return !v8i_any(~(v8i_half(row, 0) & v8i_half(row, 8))); }
 #endif
 
 /* The half of a tile (first column 0 or 8) holding every column of the tile starting at

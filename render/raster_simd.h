@@ -7,7 +7,7 @@
 #include <stdint.h>
 #include <math.h>
 #include <string.h>
-#if defined(__AVX512F__)
+#if defined(__AVX512F__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
 #if defined(__GNUC__) && !defined(__clang__)
@@ -119,11 +119,18 @@ MGS_VINLINE v16f v16f_ceil(v16f x) {
 MGS_VINLINE v16f v16f_exp_neg(v16f x) { MGS_EXP_NEG_BODY(v16f, v16i, v16f_set1, v16f_max, v16f_fma) }
 /* ---- 8 lanes (half a tile row), for Gaussians whose pixels lie in one half of a tile
  * (cheaper where a 512-bit operation runs as two 256-bit halves, as on AMD Zen 4). The
- * same operations as the 16-wide versions lane for lane (identical results). */
+ * same operations as the 16-wide versions lane for lane (identical results).
+ * On AVX2 without AVX-512 (MGS_ROWS8) the 3DGS tile kernels work in these halves
+ * throughout: GCC scalarizes comparisons of 64-byte vectors there (a compare and a branch
+ * per lane), while 32-byte vectors are native. */
 typedef float v8f __attribute__((vector_size(32)));
 typedef int32_t v8i __attribute__((vector_size(32)));
 #if defined(__AVX512F__) && defined(__AVX512VL__)
 #define MGS_HALF_ROWS 1
+#elif !defined(__AVX512F__) && defined(__AVX2__)
+#define MGS_ROWS8 1
+#endif
+#if defined(MGS_HALF_ROWS) || defined(MGS_ROWS8)
 MGS_VINLINE v8f v8f_set1(float x) { return (v8f){x, x, x, x, x, x, x, x}; }
 MGS_VINLINE v8i v8i_set1(int32_t x) { return (v8i){x, x, x, x, x, x, x, x}; }
 /* half h (0 or 8: the first float) of a 16-lane row kept in memory */
@@ -135,8 +142,16 @@ MGS_VINLINE v8f v8f_select(v8i m, v8f a, v8f b) { return (v8f)((m & (v8i)a) | (~
 MGS_VINLINE v8f v8f_and(v8i m, v8f a) { return (v8f)(m & (v8i)a); }
 MGS_VINLINE v8f v8f_min(v8f a, v8f b) { return v8f_select(a < b, a, b); }
 MGS_VINLINE v8f v8f_max(v8f a, v8f b) { return v8f_select(a > b, a, b); }
+#if defined(MGS_HALF_ROWS)
 MGS_VINLINE v8f v8f_fma(v8f a, v8f b, v8f c) { return (v8f)_mm256_fmadd_ps((__m256)a, (__m256)b, (__m256)c); }
 MGS_VINLINE int v8i_any(v8i m) { return _mm256_test_epi32_mask((__m256i)m, (__m256i)m) != 0; }
+#else
+/* unfused, as v16f_fma without AVX-512 (C17 mode: no contraction) */
+MGS_VINLINE v8f v8f_fma(v8f a, v8f b, v8f c) { return a * b + c; }
+MGS_VINLINE int v8i_any(v8i m) { return !_mm256_testz_si256((__m256i)m, (__m256i)m); }
+/* v16f_rcp without AVX-512: a true division */
+MGS_VINLINE v8f v8f_rcp(v8f x) { return v8f_set1(1.0f) / x; }
+#endif
 /* v16f_exp_neg, 8 lanes */
 MGS_VINLINE v8f v8f_exp_neg(v8f x) { MGS_EXP_NEG_BODY(v8f, v8i, v8f_set1, v8f_max, v8f_fma) }
 #endif

@@ -84,7 +84,7 @@ MGS_VINLINE void surfel_T16(const mgs_raster *r, const cam_par *cp, const float 
   const v16f zero = v16f_set1(0.0f), one = v16f_set1(1.0f), two = v16f_set1(2.0f);
   v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
   v16f qn = v16f_sqrt(w * w + x * x + y * y + z * z);
-  v16i nz = qn > zero;
+  v16i nz = v16f_gt(qn, zero);
   v16f qd = v16f_select(nz, qn, one);
   w = v16f_select(nz, w / qd, one); x = v16f_and(nz, x / qd); y = v16f_and(nz, y / qd); z = v16f_and(nz, z / qd);
   R[0] = one - two * (y * y + z * z); R[1] = two * (x * y - w * z); R[2] = two * (x * z + w * y);
@@ -296,7 +296,7 @@ static void project_block(const proj_ctx *pc, const size_t *ids, int nl) {
   v16f *Tu = Tc[0], *Tv = Tc[1], *Tw = Tc[2];
   const v16f t0 = v16f_set1(CUTOFF * CUTOFF), t2 = v16f_set1(-1.0f);
   v16f d = t0 * Tw[0] * Tw[0] + t0 * Tw[1] * Tw[1] + t2 * Tw[2] * Tw[2];
-  v16i dok = (d != zero) & (d - d == zero);
+  v16i dok = v16f_ne(d, zero) & v16f_eq(d - d, zero);
   v16f dq2 = v16f_select(dok, d, one);
   v16f f0 = t0 / dq2, f2 = t2 / dq2;
   v16f cx = f0 * Tu[0] * Tw[0] + f0 * Tu[1] * Tw[1] + f2 * Tu[2] * Tw[2];
@@ -304,11 +304,12 @@ static void project_block(const proj_ctx *pc, const size_t *ids, int nl) {
   v16f hx0 = cx * cx - (f0 * Tu[0] * Tu[0] + f0 * Tu[1] * Tu[1] + f2 * Tu[2] * Tu[2]);
   v16f hy0 = cy * cy - (f0 * Tv[0] * Tv[0] + f0 * Tv[1] * Tv[1] + f2 * Tv[2] * Tv[2]);
   const v16f hmin = v16f_set1(1e-4f), rmin = v16f_set1(CUTOFF * FILTER_SIZE);
-  v16f hx = v16f_sqrt(v16f_select(hx0 > hmin, hx0, hmin)), hy = v16f_sqrt(v16f_select(hy0 > hmin, hy0, hmin));
-  v16f ext = v16f_select(hx > hy, hx, hy);
-  v16f radius = v16f_ceil(v16f_select(ext > rmin, ext, rmin));
+  v16f hx = v16f_sqrt(v16f_max(hx0, hmin)), hy = v16f_sqrt(v16f_max(hy0, hmin));
+  v16f ext = v16f_max(hx, hy);
+  v16f radius = v16f_ceil(v16f_max(ext, rmin));
   v16f op = one / (one + v16f_exp(zero - v16f_load(logit)));
-  v16i bok = dok & (cx - cx == zero) & (cy - cy == zero) & (radius - radius == zero) & (radius <= v16f_set1(1e7f));
+  v16i bok = dok & v16f_eq(cx - cx, zero) & v16f_eq(cy - cy, zero) & v16f_eq(radius - radius, zero) &
+             v16f_le(radius, v16f_set1(1e7f));
   float cxl[16], cyl[16], radl[16], opl[16], T9[9][16];
   v16f_store(cxl, cx); v16f_store(cyl, cy); v16f_store(radl, radius); v16f_store(opl, op);
   for (int k = 0; k < 3; k++) { v16f_store(T9[k], Tu[k]); v16f_store(T9[3 + k], Tv[k]); v16f_store(T9[6 + k], Tw[k]); }
@@ -479,7 +480,7 @@ static void backward_block(mgs_raster *r, const cam_par *cp, const size_t *blk, 
   /* box centre c = (f.(Tu o Tw), f.(Tv o Tw)), f = t / (t.(Tw o Tw)) */
   {
     v16f gcx = v16f_load(gsl[S2_OX]), gcy = v16f_load(gsl[S2_OY]), ox = v16f_load(oxl), oy = v16f_load(oyl);
-    v16i live = (gcx != zero) | (gcy != zero);
+    v16i live = v16f_ne(gcx, zero) | v16f_ne(gcy, zero);
     const float t[3] = {CUTOFF * CUTOFF, CUTOFF * CUTOFF, -1.0f};
     v16f d = v16f_set1(t[0]) * Tw[0] * Tw[0] + v16f_set1(t[1]) * Tw[1] * Tw[1] + v16f_set1(t[2]) * Tw[2] * Tw[2];
     d = v16f_select(live, d, one);
@@ -512,7 +513,7 @@ static void backward_block(mgs_raster *r, const cam_par *cp, const size_t *blk, 
   {
     v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
     v16f qn2 = w * w + x * x + y * y + z * z;
-    v16i pos = qn2 > zero;
+    v16i pos = v16f_gt(qn2, zero);
     v16f qn = v16f_sqrt(v16f_select(pos, qn2, one));
     w = w / qn; x = x / qn; y = y / qn; z = z / qn;
     v16f g4[4];
@@ -602,7 +603,7 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
       v16f_store(gs, acc);
       const float *zs = mgs_raster2d_zc_side(r) + r->gauss_off[i];
       for (uint32_t k = 0; k < cnt; k++) gs[S2_ZC] += zs[k];
-      any = v16i_any(((v16i)acc << 1) != 0) || gs[S2_ZC] != 0; /* +-0 is no gradient */
+      any = v16i_any(v16i_ne((v16i)acc << 1, v16i_set1(0))) || gs[S2_ZC] != 0; /* +-0 is no gradient */
     } else {
       for (uint32_t k = 0; k < cnt; k++, q += st)
         for (int c = 0; c < nc; c++) gs[c] += q[c];

@@ -43,21 +43,21 @@ MGS_VINLINE void isect_eval(const mgs_surf2d *sf, const isect_cols *c, float Y, 
   v16f px = c->qx + (sf->c1[0] * yp + sf->c2[0]);
   v16f py = c->qy + (sf->c1[1] * yp + sf->c2[1]);
   v16f pz = c->qz + (sf->c1[2] * yp + sf->c2[2]);
-  v16i pok = pz != v16f_set1(0.0f);
+  v16i pok = v16f_ne(pz, v16f_set1(0.0f));
   o->ipz = v16f_rcp(v16f_select(pok, pz, one));
   o->sx = px * o->ipz;
   o->sy = py * o->ipz;
   o->rho3 = v16f_fma(o->sx, o->sx, o->sy * o->sy);
   o->rho2 = c->rx2 + MGS_2DGS_FILTER_INV2 * (yp * yp);
   v16f rho = v16f_min(o->rho3, o->rho2);
-  o->use3 = o->rho3 <= o->rho2;
+  o->use3 = v16f_le(o->rho3, o->rho2);
   /* where the screen-space filter wins the depth is the centre's (as the authors': an
      edge-on surfel's ray-plane intersection lies arbitrarily far away) */
   o->z = v16f_select(o->use3, sf->det * o->ipz, v16f_set1(sf->zc));
   o->G = v16f_exp_neg(v16f_set1(-0.5f) * rho);
   o->raw = v16f_set1(sf->opacity) * o->G;
   o->alpha = v16f_min(v16f_set1(MGS_ALPHA_MAX), o->raw);
-  o->m = pok & (o->z >= v16f_set1(MGS_2DGS_NEAR)) & (o->alpha >= v16f_set1(MGS_ALPHA_MIN));
+  o->m = pok & v16f_ge(o->z, v16f_set1(MGS_2DGS_NEAR)) & v16f_ge(o->alpha, v16f_set1(MGS_ALPHA_MIN));
 }
 
 MGS_VINLINE v16f zero_minus(v16f a) { return v16f_set1(0.0f) - a; }
@@ -84,16 +84,6 @@ MGS_VINLINE v16f v16f_sum16(const v16f *y) {
 #endif
 }
 
-MGS_VINLINE uint32_t v16i_bits(v16i m) {
-#if defined(__AVX512F__)
-  return _mm512_test_epi32_mask((__m512i)m, (__m512i)m);
-#else
-  uint32_t b = 0;
-  for (int i = 0; i < 16; i++) b |= (uint32_t)(m[i] != 0) << i;
-  return b;
-#endif
-}
-
 /* Bit y set: row y of the tile at (x0, y0) (nrows x ncols) has pixel centres where the
  * surfel can reach alpha >= 1/255 (the region of raster_2dgs.h), one lane per row. */
 MGS_VINLINE uint32_t row_bits(const mgs_surf2d *sf, int x0, int y0, int nrows, int ncols) {
@@ -102,15 +92,16 @@ MGS_VINLINE uint32_t row_bits(const mgs_surf2d *sf, int x0, int y0, int nrows, i
   v16f yl = lanes + ((float)y0 + 0.5f - sf->oy);
   v16f d = yl - sf->yc;
   v16f hw2 = sf->h0 - sf->kq * (d * d);
-  v16i cv = hw2 >= v16f_set1(0.0f);
+  v16i cv = v16f_ge(hw2, v16f_set1(0.0f));
   v16f hw = v16f_sqrt(v16f_and(cv, hw2));
   v16f xm = sf->xc + sf->sl * d;
   v16f lo = v16f_select(cv, xm - hw, inf), hi = v16f_select(cv, xm + hw, zero_minus(inf));
-  v16i dv = (yl <= rf) & (yl >= zero_minus(rf));
+  v16i dv = v16f_le(yl, rf) & v16f_ge(yl, zero_minus(rf));
   lo = v16f_select(dv, v16f_min(lo, zero_minus(rf)), lo);
   hi = v16f_select(dv, v16f_max(hi, rf), hi);
   float xmin = (float)x0 + 0.5f - sf->ox - 0.05f, xmax = (float)(x0 + ncols) - 0.5f - sf->ox + 0.05f;
-  v16i hit = (lo - v16f_set1(1e-3f) * v16f_abs(lo) <= v16f_set1(xmax)) & (hi + v16f_set1(1e-3f) * v16f_abs(hi) >= v16f_set1(xmin));
+  v16i hit = v16f_le(lo - v16f_set1(1e-3f) * v16f_abs(lo), v16f_set1(xmax)) &
+             v16f_ge(hi + v16f_set1(1e-3f) * v16f_abs(hi), v16f_set1(xmin));
   return v16i_bits(hit) & ((1u << nrows) - 1u);
 }
 
@@ -168,7 +159,7 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
       isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
       v16i m = e.m & ~DONE[y];
       v16f testT = T[y] * (one - e.alpha);
-      v16i nd = m & (testT < tmin);
+      v16i nd = m & v16f_lt(testT, tmin);
       DONE[y] |= nd;
       if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
       m &= ~nd;
@@ -176,12 +167,12 @@ static inline __attribute__((always_inline)) void render_tile_impl(mgs_raster *r
       v16f w = v16f_and(m, e.alpha * T[y]);
       if (geo) {
         v16f mz = depth_map(e.z);
-        A[M0][y] = v16f_select(m & (T[y] == one), mz, A[M0][y]);
+        A[M0][y] = v16f_select(m & v16f_eq(T[y], one), mz, A[M0][y]);
         v16f md = v16f_select(m, mz - A[M0][y], v16f_set1(0.0f));
         A[DI][y] += w * (md * md * (one - T[y]) + A[M2][y] - 2.0f * md * A[M1][y]);
         A[M1][y] += w * md;
         A[M2][y] += w * md * md;
-        v16i med = m & (T[y] > half);
+        v16i med = m & v16f_gt(T[y], half);
         A[MED][y] = v16f_select(med, e.z, A[MED][y]);
         MID[y] = (med & jid) | (~med & MID[y]);
         A[N0][y] += w * cd->n[0]; A[N1][y] += w * cd->n[1]; A[N2][y] += w * cd->n[2];
@@ -312,7 +303,7 @@ static void blend_tile(const blend_ctx *bc, size_t tile) {
         isect_eval(sf, &ic, (float)(y0 + y) + 0.5f, &e);
         v16i m = e.m & ~DONE[y];
         v16f testT = T[y] * (one - e.alpha);
-        v16i nd = m & (testT < tmin);
+        v16i nd = m & v16f_lt(testT, tmin);
         DONE[y] |= nd;
         if (v16i_any(nd) && !v16i_any(~DONE[y])) rowdone |= 1u << y;
         m &= ~nd;
@@ -440,7 +431,7 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       float Y = (float)(y0 + y) + 0.5f;
       isect_row e;
       isect_eval(sf, &ic, Y, &e);
-      v16i m = e.m & (jid < NC[y]);
+      v16i m = e.m & v16i_lt(jid, NC[y]);
       if (!v16i_any(m)) continue;
       touched = 1;
       v16f inv = v16f_rcp(one - e.alpha);
@@ -460,14 +451,14 @@ static inline __attribute__((always_inline)) void backward_tile_impl(const bwd_c
       v16f Sy = S[y];
       v16f dLda = v16f_fma(zero - (Sy + I[K][y]), inv, Tn * val);
       S[y] = v16f_fma(val, w, Sy);
-      dLda = v16f_and(m & (e.raw < amax), dLda);
+      dLda = v16f_and(m & v16f_lt(e.raw, amax), dLda);
       AOP = v16f_fma(e.G, dLda, AOP);
       v16f q = e.raw * dLda; /* dL/drho = -q/2 */
       /* depth of the intersection */
       v16f dLdz = w * I[GD][y];
       if (geo) {
         v16f iz = one / v16f_select(m, e.z, one);
-        dLdz += v16f_and(m & (MID[y] == jid1), I[GM][y]) + 2.0f * w * (md * I[FA][y] - I[FM1][y]) * I[GDI][y] * dmdz_c * iz * iz;
+        dLdz += v16f_and(m & v16i_eq(MID[y], jid1), I[GM][y]) + 2.0f * w * (md * I[FA][y] - I[FM1][y]) * I[GDI][y] * dmdz_c * iz * iz;
         dLdz = v16f_and(m, dLdz);
       }
       v16i use3 = m & e.use3;

@@ -33,9 +33,9 @@ MGS_VINLINE v16f mgs_row_step(const mgs_splat *sp, v16f dx, float dy, v16f T, v1
   const v16f zero = v16f_set1(0.0f);
   v16f power = mgs_row_power(sp, dx, dy);
   v16f a = v16f_min(v16f_set1(MGS_ALPHA_MAX), v16f_set1(sp->opacity) * v16f_exp_neg(power));
-  v16i mm = (power <= zero) & (a >= v16f_set1(MGS_ALPHA_MIN)) & ~*done;
+  v16i mm = v16f_le(power, zero) & v16f_ge(a, v16f_set1(MGS_ALPHA_MIN)) & ~*done;
   v16f testT = T * (v16f_set1(1.0f) - a);
-  v16i nd = mm & (testT < v16f_set1(MGS_T_MIN));
+  v16i nd = mm & v16f_lt(testT, v16f_set1(MGS_T_MIN));
   *done |= nd;
   if (v16i_any(nd)) *rowdone = !v16i_any(~*done);
   *m = mm & ~nd;
@@ -51,7 +51,7 @@ MGS_VINLINE void mgs_blend_stat_step(v16i m, v16f alpha, v16f testT, v16i gidx, 
                                      v16f *wsum) {
   v16f w = v16f_and(m, alpha * *T);
   *wsum += w;
-  v16i better = m & (w > *wmax);
+  v16i better = m & v16f_gt(w, *wmax);
   *wmax = v16f_select(better, w, *wmax);
   *imax = (better & gidx) | (~better & *imax);
   *T = v16f_select(m, testT, *T);

@@ -73,7 +73,7 @@ static void maps_tile(mgs_raster *r, size_t tile, int want_n, int want_m) {
       if (rowdone[y]) continue;
       v16i m;
       v16f alpha, testT = mgs_row_step(sp, dx, (float)(y0 + y) + 0.5f - sp->v, T[y], &DONE[y], &rowdone[y], &m, &alpha);
-      if (want_m) MED[y] = v16f_select(m & (T[y] >= half) & (testT < half), cz, MED[y]);
+      if (want_m) MED[y] = v16f_select(m & v16f_ge(T[y], half) & v16f_lt(testT, half), cz, MED[y]);
       if (want_n) {
         v16f w = v16f_and(m, alpha * T[y]);
         N0[y] = v16f_fma(w, v16f_set1(gn[0]), N0[y]);

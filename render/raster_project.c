@@ -87,7 +87,7 @@ __attribute__((noinline)) static void proj_geom16(const geom_par *gp, const floa
   /* rotation of the normalized quaternion (identity for a zero one, as mgs_quat_to_mat3f) */
   v16f w = v16f_load(q[0]), x = v16f_load(q[1]), y = v16f_load(q[2]), z = v16f_load(q[3]);
   v16f n2 = w * w + x * x + y * y + z * z;
-  v16i nz = n2 > zero;
+  v16i nz = v16f_gt(n2, zero);
   v16f inv = one / v16f_sqrt(v16f_select(nz, n2, one));
   w = v16f_select(nz, w * inv, one); x = v16f_and(nz, x * inv); y = v16f_and(nz, y * inv); z = v16f_and(nz, z * inv);
   v16f two = v16f_set1(2.0f);
@@ -103,8 +103,8 @@ __attribute__((noinline)) static void proj_geom16(const geom_par *gp, const floa
   v16f iz = one / tz;
   v16f txtz = tx * iz, tytz = ty * iz;
   v16f lx0 = v16f_set1(gp->lx[0]), lx1 = v16f_set1(gp->lx[1]), ly0 = v16f_set1(gp->ly[0]), ly1 = v16f_set1(gp->ly[1]);
-  v16i_store(o->clx, (txtz < lx0) | (txtz > lx1));
-  v16i_store(o->cly, (tytz < ly0) | (tytz > ly1));
+  v16i_store(o->clx, v16f_lt(txtz, lx0) | v16f_gt(txtz, lx1));
+  v16i_store(o->cly, v16f_lt(tytz, ly0) | v16f_gt(tytz, ly1));
   v16f txc = v16f_min(v16f_max(txtz, lx0), lx1) * tz, tyc = v16f_min(v16f_max(tytz, ly0), ly1) * tz;
   v16f J00 = fx * iz, J02 = v16f_set1(-1.0f) * fx * txc * iz * iz, J11 = fy * iz, J12 = v16f_set1(-1.0f) * fy * tyc * iz * iz;
   const float *W = gp->W;
@@ -488,7 +488,7 @@ void mgs_raster_project_backward16(mgs_raster *r, const uint32_t *idx, int nl, f
   }
   v16f q0 = v16f_load(ql[0]), q1 = v16f_load(ql[1]), q2 = v16f_load(ql[2]), q3 = v16f_load(ql[3]);
   v16f qn2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3;
-  v16i qok = qn2 > zero;
+  v16i qok = v16f_gt(qn2, zero);
   v16f qn = v16f_sqrt(v16f_select(qok, qn2, v16f_set1(1.0f)));
   v16f iqn = 1.0f / qn;
   v16f w = q0 * iqn, x = q1 * iqn, y = q2 * iqn, z = q3 * iqn;

@@ -28,11 +28,80 @@ MGS_VINLINE v16f v16f_load(const float *p) { v16f v; memcpy(&v, p, sizeof v); re
 MGS_VINLINE void v16f_store(float *p, v16f v) { memcpy(p, &v, sizeof v); }
 MGS_VINLINE v16i v16i_load(const int32_t *p) { v16i v; memcpy(&v, p, sizeof v); return v; }
 MGS_VINLINE void v16i_store(int32_t *p, v16i v) { memcpy(p, &v, sizeof v); }
+/* Comparisons, min/max and masks of whole rows. Kernels call these rather than the
+ * operators (a < b on v16f): on AVX2 without AVX-512 GCC 12 scalarizes a comparison of
+ * 64-byte vectors (a compare, a branch and a setcc per lane), so there they are done as
+ * two native 256-bit halves with the same predicates, lane for lane the same results.
+ * The ordered predicates (<, <=, >, >=) are the signalling ones, as C's operators; ==
+ * is ordered-quiet and != unordered-quiet (true on NaN), as C's. */
+#if !defined(__AVX512F__) && defined(__AVX2__)
+#define MGS_V16_HALVES 1
+typedef union { v16f v; __m256 h[2]; } mgs_v16f_h;
+typedef union { v16i v; __m256i h[2]; } mgs_v16i_h;
+#define MGS_V16F_CMP(name, op, pred)                                                    \
+  MGS_VINLINE v16i name(v16f a, v16f b) {                                               \
+    mgs_v16f_h x = {a}, y = {b}, r;                                                     \
+    r.h[0] = _mm256_cmp_ps(x.h[0], y.h[0], pred);                                       \
+    r.h[1] = _mm256_cmp_ps(x.h[1], y.h[1], pred);                                       \
+    return (v16i)r.v;                                                                   \
+  }
+#else
+#define MGS_V16F_CMP(name, op, pred) \
+  MGS_VINLINE v16i name(v16f a, v16f b) { return a op b; }
+#endif
+MGS_V16F_CMP(v16f_lt, <, _CMP_LT_OS)
+MGS_V16F_CMP(v16f_le, <=, _CMP_LE_OS)
+MGS_V16F_CMP(v16f_gt, >, _CMP_GT_OS)
+MGS_V16F_CMP(v16f_ge, >=, _CMP_GE_OS)
+MGS_V16F_CMP(v16f_eq, ==, _CMP_EQ_OQ)
+MGS_V16F_CMP(v16f_ne, !=, _CMP_NEQ_UQ)
+#undef MGS_V16F_CMP
+MGS_VINLINE v16i v16i_eq(v16i a, v16i b) {
+#if defined(MGS_V16_HALVES)
+  mgs_v16i_h x = {a}, y = {b}, r;
+  r.h[0] = _mm256_cmpeq_epi32(x.h[0], y.h[0]);
+  r.h[1] = _mm256_cmpeq_epi32(x.h[1], y.h[1]);
+  return r.v;
+#else
+  return a == b;
+#endif
+}
+MGS_VINLINE v16i v16i_ne(v16i a, v16i b) { return ~v16i_eq(a, b); }
+MGS_VINLINE v16i v16i_lt(v16i a, v16i b) {
+#if defined(MGS_V16_HALVES)
+  mgs_v16i_h x = {a}, y = {b}, r;
+  r.h[0] = _mm256_cmpgt_epi32(y.h[0], x.h[0]);
+  r.h[1] = _mm256_cmpgt_epi32(y.h[1], x.h[1]);
+  return r.v;
+#else
+  return a < b;
+#endif
+}
 /* m: lanes all-ones or zero (the result of a vector comparison). */
 MGS_VINLINE v16f v16f_select(v16i m, v16f a, v16f b) { return (v16f)((m & (v16i)a) | (~m & (v16i)b)); }
 MGS_VINLINE v16f v16f_and(v16i m, v16f a) { return (v16f)(m & (v16i)a); }
-MGS_VINLINE v16f v16f_min(v16f a, v16f b) { return v16f_select(a < b, a, b); }
-MGS_VINLINE v16f v16f_max(v16f a, v16f b) { return v16f_select(a > b, a, b); }
+/* (a < b ? a : b) and (a > b ? a : b) per lane: b when either is NaN or both are zeros,
+ * which is exactly what minps/maxps return (their second operand then) */
+MGS_VINLINE v16f v16f_min(v16f a, v16f b) {
+#if defined(MGS_V16_HALVES)
+  mgs_v16f_h x = {a}, y = {b}, r;
+  r.h[0] = _mm256_min_ps(x.h[0], y.h[0]);
+  r.h[1] = _mm256_min_ps(x.h[1], y.h[1]);
+  return r.v;
+#else
+  return v16f_select(a < b, a, b);
+#endif
+}
+MGS_VINLINE v16f v16f_max(v16f a, v16f b) {
+#if defined(MGS_V16_HALVES)
+  mgs_v16f_h x = {a}, y = {b}, r;
+  r.h[0] = _mm256_max_ps(x.h[0], y.h[0]);
+  r.h[1] = _mm256_max_ps(x.h[1], y.h[1]);
+  return r.v;
+#else
+  return v16f_select(a > b, a, b);
+#endif
+}
 /* a*b + c, fused where the target has FMA (explicit, so that the result does not depend
  * on the compiler's contraction choices: forward and backward must agree bit for bit) */
 MGS_VINLINE v16f v16f_fma(v16f a, v16f b, v16f c) {
@@ -55,11 +124,32 @@ MGS_VINLINE v16f v16f_rcp(v16f x) {
 MGS_VINLINE int v16i_any(v16i m) {
 #if defined(__AVX512F__)
   return _mm512_test_epi32_mask((__m512i)m, (__m512i)m) != 0;
+#elif defined(MGS_V16_HALVES)
+  mgs_v16i_h x = {m};
+  __m256i o = _mm256_or_si256(x.h[0], x.h[1]);
+  return !_mm256_testz_si256(o, o);
 #else
   int32_t t[16]; memcpy(t, &m, sizeof t);
   int32_t r = 0;
   for (int i = 0; i < 16; i++) r |= t[i];
   return r != 0;
+#endif
+}
+/* bit i set where lane i of m is nonzero */
+MGS_VINLINE uint32_t v16i_bits(v16i m) {
+#if defined(__AVX512F__)
+  return _mm512_test_epi32_mask((__m512i)m, (__m512i)m);
+#elif defined(MGS_V16_HALVES)
+  /* lanes equal to zero, inverted: exact for any m, not only all-ones/zero masks */
+  mgs_v16i_h u = {m};
+  const __m256i z = _mm256_setzero_si256();
+  uint32_t lo = (uint32_t)_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(u.h[0], z)));
+  uint32_t hi = (uint32_t)_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(u.h[1], z)));
+  return ~(lo | hi << 8) & 0xffffu;
+#else
+  uint32_t b = 0;
+  for (int i = 0; i < 16; i++) b |= (uint32_t)(m[i] != 0) << i;
+  return b;
 #endif
 }
 MGS_VINLINE float v16f_sum(v16f v) {
@@ -76,6 +166,12 @@ MGS_VINLINE float v16f_sum(v16f v) {
 MGS_VINLINE v16f v16f_sqrt(v16f x) {
 #if defined(__AVX512F__)
   return (v16f)_mm512_sqrt_ps((__m512)x);
+#elif defined(MGS_V16_HALVES)
+  /* correctly rounded as sqrtf; on x < 0 the same default NaN */
+  mgs_v16f_h u = {x};
+  u.h[0] = _mm256_sqrt_ps(u.h[0]);
+  u.h[1] = _mm256_sqrt_ps(u.h[1]);
+  return u.v;
 #else
   v16f r;
   for (int i = 0; i < 16; i++) r[i] = sqrtf(x[i]);
@@ -85,6 +181,11 @@ MGS_VINLINE v16f v16f_sqrt(v16f x) {
 MGS_VINLINE v16f v16f_ceil(v16f x) {
 #if defined(__AVX512F__)
   return (v16f)_mm512_roundscale_ps((__m512)x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+#elif defined(MGS_V16_HALVES)
+  mgs_v16f_h u = {x};
+  u.h[0] = _mm256_round_ps(u.h[0], _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  u.h[1] = _mm256_round_ps(u.h[1], _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  return u.v;
 #else
   v16f r;
   for (int i = 0; i < 16; i++) r[i] = ceilf(x[i]);

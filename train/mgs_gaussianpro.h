@@ -80,8 +80,9 @@ const float *mgs_gpro_checked_normal(const mgs_gpro *p, size_t view);
 mgs_status mgs_gpro_save(const mgs_gpro *p, FILE *f, mgs_error *err);
 mgs_status mgs_gpro_load(mgs_gpro *p, FILE *f, mgs_error *err);
 
-/* The planar loss (train/term_planar.c), model gradients from iteration from + 1 on the
- * views with a checked propagation of `pro` (borrowed: the strategy's): weight_normal x
+/* The planar loss (train/term_planar.c), an image term from iteration from + 1 on the
+ * views with a checked propagation of `pro` (borrowed: the strategy's), read from the
+ * iteration's render and carried by its backward: weight_normal x
  * mean (1 - cos(rendered normal, propagated normal)) + weight_l1 x mean |N/|N| - n|_1 in
  * the camera frame + weight x mean |sum w z - depth|. */
 mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, double weight_l1, int from,
@@ -100,6 +101,12 @@ typedef struct mgs_planar_target {
 mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *t,
                            float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
                            mgs_error *err);
+/* The same value from the last forward on r (its depth `depth`, its normal map): with
+ * want_grad, the depth half ADDED into dl_ddepth (*depth_used set to 1 when it has one)
+ * and the normal halves into r's normal-map gradient (mgs_raster_map_grads), for r's next
+ * backward to carry; mgs_planar_loss is a forward, this and a backward. */
+mgs_status mgs_planar_loss_add(mgs_raster *r, const mgs_camera *cam, const mgs_planar_target *t, const float *depth,
+                               float *dl_ddepth, int *depth_used, int want_grad, double *value, mgs_error *err);
 
 /* The ADC of `adc` plus propagation (views borrowed from the dataset's training split). */
 mgs_status mgs_strategy_gaussianpro_create(const mgs_adc_options *adc, const mgs_gpro_options *o, const mgs_view *views,

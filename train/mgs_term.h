@@ -44,6 +44,11 @@ typedef struct mgs_term_step {
   double extent;                /* scene radius (the reference's cameras_extent) */
   mgs_rng *rng;
   float *dl_dcolor;             /* image_grad adds here */
+  float *dl_ddepth;             /* image_grad adds dL/d(depth) here (width x height, zeroed);
+                                   non-NULL only in iterations where a term's active() has
+                                   MGS_TERM_DEPTH */
+  int dl_ddepth_used;           /* out: set by a term that added to dl_ddepth (the backward
+                                   then reads it) */
   struct mgs_raster *raster;    /* the rasterizer context of this iteration's forward (its
                                    maps and, for 2DGS, map gradients: render/mgs_raster.h) */
   mgs_gaussians *grad;          /* model_grad adds here (the model's n and SH degree) */
@@ -54,8 +59,10 @@ typedef struct mgs_term_ops {
   const char *name;             /* also the checkpoint's key for its state (< 32 chars) */
   /* Which hooks run in this iteration: MGS_TERM_IMAGE | MGS_TERM_MODEL bits (0: none);
      with MGS_TERM_MAPS the image hook reads the geometry maps (mgs_raster_maps), and the
-     trainer asks the forward for them ahead (mgs_raster_hint_maps). A function of the
-     iteration only: the trainer calls it before the forward and again after. */
+     trainer asks the forward for them ahead (mgs_raster_hint_maps); with MGS_TERM_DEPTH
+     it may add a gradient of the rendered depth (s->dl_ddepth), carried by the same
+     backward as the colour's. A function of the iteration only: the trainer calls it
+     before the forward and again after. */
   unsigned (*active)(void *self, int iteration);
   mgs_status (*image_grad)(void *self, mgs_term_step *s, mgs_error *err);
   mgs_status (*model_grad)(void *self, mgs_term_step *s, mgs_error *err);
@@ -64,7 +71,7 @@ typedef struct mgs_term_ops {
   void (*destroy)(void *self);
 } mgs_term_ops;
 
-enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u, MGS_TERM_MAPS = 4u };
+enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u, MGS_TERM_MAPS = 4u, MGS_TERM_DEPTH = 8u };
 
 typedef struct mgs_term {
   const mgs_term_ops *ops;

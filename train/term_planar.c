@@ -1,5 +1,7 @@
 /* GaussianPro's planar loss (train/mgs_gaussianpro.h) on the views matched as the
- * reference, from the rasterizer's maps of one more render of the iteration's view:
+ * reference, from the maps of the iteration's own render; its gradient joins that render's
+ * backward (dL/d(depth) and the normal map's gradient), as the authors' one loss.backward()
+ * (so it also enters the densification statistics, as theirs does):
  *
  *   normal half  w_normal x mean over the accepted pixels of (1 - cos(N, n_p)), N the
  *                rendered normal (sum_i w_i n_i, render/mgs_render_maps.h; the authors
@@ -27,19 +29,16 @@ typedef struct planar {
   const mgs_gpro *pro;
   double weight, weight_normal, weight_l1;
   int from;
-  mgs_raster *raster;
-  float *dl_ddepth, *dl_dcolor;
-  size_t cap;
 } planar;
 
 static unsigned planar_active(void *self, int it) {
   planar *t = self;
-  return (t->weight > 0 || t->weight_normal > 0 || t->weight_l1 > 0) && it > t->from ? MGS_TERM_MODEL : 0u;
+  if (!((t->weight > 0 || t->weight_normal > 0 || t->weight_l1 > 0) && it > t->from)) return 0u;
+  return MGS_TERM_IMAGE | MGS_TERM_MAPS | (t->weight > 0 ? MGS_TERM_DEPTH : 0u);
 }
 
-mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *tg,
-                           float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
-                           mgs_error *err) {
+mgs_status mgs_planar_loss_add(mgs_raster *r, const mgs_camera *cam, const mgs_planar_target *tg, const float *depth,
+                               float *dl_ddepth, int *depth_used, int want_grad, double *value, mgs_error *err) {
   *value = 0;
   size_t np = (size_t)cam->width * (size_t)cam->height, valid = 0, valid_n = 0;
   const float *target = tg->w_depth > 0 ? tg->depth : NULL, *tn = tg->w_normal > 0 || tg->w_l1 > 0 ? tg->normal : NULL;
@@ -47,34 +46,23 @@ mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_came
     for (size_t k = 0; k < np; k++) valid += target[k] > 0;
   if (tn)
     for (size_t k = 0; k < np; k++) valid_n += tn[3 * k] != 0 || tn[3 * k + 1] != 0 || tn[3 * k + 2] != 0;
-  if (!valid && !valid_n) return MGS_OK;
-  if (np > *cap) {
-    float *a = realloc(*dl_ddepth, np * sizeof(float));
-    if (a) *dl_ddepth = a;
-    float *b = a ? realloc(*dl_dcolor, 3 * np * sizeof(float)) : NULL;
-    if (b) *dl_dcolor = b;
-    if (!a || !b) return mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");
-    *cap = np;
+  if (valid) {
+    if (want_grad && !dl_ddepth)
+      return mgs_error_set(err, MGS_ERR_ARG, "planar loss: a depth target but no depth gradient buffer");
+    double sum = 0, w = tg->w_depth / (double)valid;
+    for (size_t k = 0; k < np; k++) {
+      float d = target[k] > 0 ? depth[k] - target[k] : 0.0f;
+      sum += fabs((double)d);
+      if (want_grad) dl_ddepth[k] += d > 0 ? (float)w : d < 0 ? (float)-w : 0.0f;
+    }
+    if (want_grad && depth_used) *depth_used = 1;
+    *value = w * sum;
   }
-  mgs_raster_settings rs;
-  mgs_raster_settings_default(&rs);
-  rs.sh_degree = 0;
-  mgs_raster_output ro;
-  mgs_status st = mgs_raster_forward(r, g, cam, &rs, &ro, err);
-  if (st) return st;
-  double sum = 0, w = valid ? tg->w_depth / (double)valid : 0.0;
-  for (size_t k = 0; k < np; k++) {
-    float d = valid && target[k] > 0 ? ro.depth[k] - target[k] : 0.0f;
-    sum += fabs((double)d);
-    (*dl_ddepth)[k] = d > 0 ? (float)w : d < 0 ? (float)-w : 0.0f;
-  }
-  memset(*dl_dcolor, 0, 3 * np * sizeof(float));
-  *value = w * sum;
   if (valid_n) {
     mgs_render_maps mp;
     mgs_raster_map_grad mg;
-    st = mgs_raster_maps(r, MGS_MAP_NORMAL, &mp, err);
-    if (st == MGS_OK && grad) st = mgs_raster_map_grads(r, &mg, err);
+    mgs_status st = mgs_raster_maps(r, MGS_MAP_NORMAL, &mp, err);
+    if (st == MGS_OK && want_grad) st = mgs_raster_map_grads(r, &mg, err);
     if (st) return st;
     const double wn = tg->w_normal / (double)valid_n, wl = tg->w_l1 / (double)valid_n;
     const double *R = cam->w2c; /* rows 0..2, columns 0..2: world -> camera rotation */
@@ -102,35 +90,62 @@ mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_came
       }
       const double ug = u[0] * gu[0] + u[1] * gu[1] + u[2] * gu[2];
       /* d(-N.t/|N|)/dN = -(t - c N/|N|)/|N| */
-      if (grad)
+      if (want_grad)
         for (int j = 0; j < 3; j++)
           mg.normal[3 * k + j] += (float)(-wn * (t[j] - c * u[j]) / len + wl * (gu[j] - u[j] * ug) / len);
     }
     *value += wn * cost + wl * cost_l1;
   }
-  return grad ? mgs_raster_backward(r, *dl_dcolor, NULL, valid ? *dl_ddepth : NULL, grad, NULL, err) : MGS_OK;
+  return MGS_OK;
 }
 
-static mgs_status planar_model_grad(void *self, mgs_term_step *s, mgs_error *err) {
+mgs_status mgs_planar_loss(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_planar_target *tg,
+                           float **dl_ddepth, float **dl_dcolor, size_t *cap, mgs_gaussians *grad, double *value,
+                           mgs_error *err) {
+  *value = 0;
+  size_t np = (size_t)cam->width * (size_t)cam->height;
+  if (np > *cap) {
+    float *a = realloc(*dl_ddepth, np * sizeof(float));
+    if (a) *dl_ddepth = a;
+    float *b = a ? realloc(*dl_dcolor, 3 * np * sizeof(float)) : NULL;
+    if (b) *dl_dcolor = b;
+    if (!a || !b) return mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");
+    *cap = np;
+  }
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  rs.sh_degree = 0;
+  mgs_raster_output ro;
+  mgs_status st = mgs_raster_forward(r, g, cam, &rs, &ro, err);
+  if (st) return st;
+  memset(*dl_ddepth, 0, np * sizeof(float));
+  memset(*dl_dcolor, 0, 3 * np * sizeof(float));
+  int used = 0;
+  if ((st = mgs_planar_loss_add(r, cam, tg, ro.depth, *dl_ddepth, &used, grad != NULL, value, err))) return st;
+  return grad ? mgs_raster_backward(r, *dl_dcolor, NULL, used ? *dl_ddepth : NULL, grad, NULL, err) : MGS_OK;
+}
+
+/* On the iteration's own render (s->raster): its maps, and the depth gradient joins the
+   trainer's backward (as the authors' loss.backward() over one render). */
+static mgs_status planar_image_grad(void *self, mgs_term_step *s, mgs_error *err) {
   planar *t = self;
   s->value = 0;
   mgs_planar_target tg = {mgs_gpro_checked_depth(t->pro, s->view_index), mgs_gpro_checked_normal(t->pro, s->view_index),
                           t->weight, t->weight_normal, t->weight_l1};
   if (!tg.depth && !tg.normal) return MGS_OK;
-  return mgs_planar_loss(t->raster, s->model, &s->view->cam, &tg, &t->dl_ddepth, &t->dl_dcolor, &t->cap, s->grad,
-                         &s->value, err);
+  double v = 0;
+  mgs_status st = mgs_planar_loss_add(s->raster, &s->view->cam, &tg, s->depth, s->dl_ddepth, &s->dl_ddepth_used, 1, &v, err);
+  s->value = v;
+  return st;
 }
 
 static void planar_destroy(void *self) {
   planar *t = self;
   if (!t) return;
-  mgs_raster_destroy(t->raster);
-  free(t->dl_ddepth);
-  free(t->dl_dcolor);
   free(t);
 }
 
-static const mgs_term_ops planar_ops = {"planar", planar_active, NULL, planar_model_grad, NULL, NULL, planar_destroy};
+static const mgs_term_ops planar_ops = {"planar", planar_active, planar_image_grad, NULL, NULL, NULL, planar_destroy};
 
 mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, double weight_l1, int from,
                                   mgs_term **out, mgs_error *err) {
@@ -139,11 +154,7 @@ mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double wei
     return mgs_error_set(err, MGS_ERR_ARG, "planar loss: negative weight (depth %g, normal %g, L1 %g)", weight, weight_normal,
                          weight_l1);
   planar *t = calloc(1, sizeof *t);
-  if (t) t->raster = mgs_raster_create();
-  if (!t || !t->raster) {
-    planar_destroy(t);
-    return mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");
-  }
+  if (!t) return mgs_error_set(err, MGS_ERR_NOMEM, "planar loss: out of memory");
   t->pro = pro;
   t->weight = weight;
   t->weight_normal = weight_normal;

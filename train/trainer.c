@@ -119,7 +119,7 @@ void mgs_trainer_destroy(mgs_trainer *t) {
   mgs_raster_destroy(t->raster);
   mgs_trainer_large_destroy(t);
   mgs_progress_destroy(t->progress);
-  free(t->perm); free(t->dl); free(t->gm2d);
+  free(t->perm); free(t->dl); free(t->dl_depth); free(t->gm2d);
   free(t);
 }
 
@@ -338,7 +338,14 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     ts.alpha = ro.alpha; ts.depth = ro.depth; ts.radii = ro.radii;
     ts.width = ro.width; ts.height = ro.height; ts.active_sh = t->active_sh; ts.extent = ext;
     ts.rng = &t->rng; ts.dl_dcolor = t->dl; ts.raster = t->raster;
+    if (term_hooks & MGS_TERM_DEPTH) {
+      size_t npx = (size_t)ro.width * (size_t)ro.height;
+      if ((st = grow_floats(&t->dl_depth, &t->dl_depth_cap, npx, err))) return st;
+      memset(t->dl_depth, 0, npx * sizeof(float));
+      ts.dl_ddepth = t->dl_depth;
+    }
   }
+  t->dl_depth_live = NULL;
   /* when the strategy's hook needs neither the gradients nor the unstepped model, the
      backward and the Adam step run fused (identical results); model terms then add their
      gradients before the backward into t->tgrad, which the fused step adds in (equal up to
@@ -365,6 +372,7 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
       t->term_values[k] += ts.value;
     }
     if (st) return st;
+    if (ts.dl_ddepth_used) t->dl_depth_live = ts.dl_ddepth;
     double t2b = mgs_now();
     t->phase_s[MGS_PHASE_TERMS] += t2b - t2;
     t2 = t2b;
@@ -383,10 +391,10 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
     t->phase_s[MGS_PHASE_TERMS] += t2b - t2;
     t2 = t2b;
     t->tgrad_clean_n = 0; /* until the fused step has cleared what the terms wrote */
-    st = mgs_adam_step_backward_extra(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, all, t->tgrad, err);
+    st = mgs_adam_step_backward_extra(t->adam, t->g, t->raster, t->dl, NULL, t->dl_depth_live, t->gm2d, all, t->tgrad, err);
     if (st == MGS_OK) t->tgrad_clean_n = t->g->n;
   } else if (fused) st = mgs_trainer_large_adam_fused(t, ro.radii, all, err);
-  else st = mgs_raster_backward(t->raster, t->dl, NULL, NULL, t->grad, t->gm2d, err);
+  else st = mgs_raster_backward(t->raster, t->dl, NULL, t->dl_depth_live, t->grad, t->gm2d, err);
   if (st == MGS_ERR_NUMERIC) return adam_stop(it, err);
   if (st) return st;
   double t3 = mgs_now();

@@ -26,6 +26,9 @@ struct mgs_trainer {
   size_t perm_len, perm_pos;
   float *dl;                    /* dL/dcolor */
   size_t dl_cap;
+  float *dl_depth;              /* dL/d(depth) from image terms (MGS_TERM_DEPTH), or NULL */
+  size_t dl_depth_cap;
+  const float *dl_depth_live;   /* dl_depth when a term wrote it this iteration, else NULL */
   float *gm2d;                  /* per-Gaussian NDC 2D-mean gradient norm */
   int grad_clean;               /* the last Adam step zeroed the gradients it read ... */
   size_t grad_clean_n;          /* ... of this many Gaussians ... */

@@ -176,8 +176,8 @@ mgs_status mgs_trainer_large_forward(mgs_trainer *t, const mgs_camera *cam, mgs_
 
 mgs_status mgs_trainer_large_adam_fused(mgs_trainer *t, const int *radii, unsigned mask, mgs_error *err) {
   if (t->o.sparse_adam)
-    return mgs_adam_step_backward_sparse(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, mask, radii, err);
-  return mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, NULL, t->gm2d, mask, err);
+    return mgs_adam_step_backward_sparse(t->adam, t->g, t->raster, t->dl, NULL, t->dl_depth_live, t->gm2d, mask, radii, err);
+  return mgs_adam_step_backward(t->adam, t->g, t->raster, t->dl, NULL, t->dl_depth_live, t->gm2d, mask, err);
 }
 
 mgs_status mgs_trainer_large_adam(mgs_trainer *t, const int *radii, unsigned mask, int zero_grad, mgs_error *err) {

@@ -3,7 +3,8 @@
  * moments and 2D-mean gradient norms over two steps, with culled Gaussians (which only
  * move by momentum), a partly active SH degree, depth/alpha gradients; the same error
  * naming the group for a non-finite value; and the trainer (which fuses outside ADC's
- * densification steps) equal to a trainer that never fuses. */
+ * densification steps) equal to a trainer that never fuses; an image term's depth gradient
+ * carried by the trainer's backward equal to its own render and backward. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -291,10 +292,139 @@ static void test_trainer_terms_fused_equal_separate(void) {
   mgs_gaussians_destroy(gt);
 }
 
+/* A depth loss sum_k w (depth_k - 2)^2 / 2 two ways: as an image term that adds dL/d(depth)
+   of the iteration's render (MGS_TERM_DEPTH: the trainer's backward carries it), and as a
+   model term that renders the view once more and runs its own backward (what GaussianPro's
+   planar term did before). With densification off the trained models agree up to float
+   rounding, on the fused and the separate paths, and differ from a run without the term. */
+typedef struct { double w; int calls, image; mgs_raster *r; float *dd, *dc; size_t cap; } depth_term;
+static unsigned depth_active(void *self, int it) {
+  depth_term *t = self;
+  return it >= 2 ? (t->image ? MGS_TERM_IMAGE | MGS_TERM_DEPTH : MGS_TERM_MODEL) : 0u;
+}
+static mgs_status depth_image(void *self, mgs_term_step *s, mgs_error *err) {
+  (void)err;
+  depth_term *t = self;
+  t->calls++;
+  if (!s->dl_ddepth) return mgs_error_set(err, MGS_ERR_ARG, "no depth gradient buffer");
+  for (int k = 0; k < s->width * s->height; k++) s->dl_ddepth[k] += (float)(t->w * (s->depth[k] - 2.0f));
+  s->dl_ddepth_used = 1;
+  return MGS_OK;
+}
+static mgs_status depth_model(void *self, mgs_term_step *s, mgs_error *err) {
+  depth_term *t = self;
+  t->calls++;
+  size_t np = (size_t)s->width * (size_t)s->height;
+  if (np > t->cap) {
+    free(t->dd); free(t->dc);
+    t->dd = calloc(np, sizeof(float));
+    t->dc = calloc(3 * np, sizeof(float));
+    t->cap = np;
+  }
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  rs.sh_degree = 0;
+  mgs_raster_output ro;
+  mgs_status st = mgs_raster_forward(t->r, s->model, &s->view->cam, &rs, &ro, err);
+  if (st) return st;
+  for (size_t k = 0; k < np; k++) t->dd[k] = (float)(t->w * (ro.depth[k] - 2.0f));
+  return mgs_raster_backward(t->r, t->dc, NULL, t->dd, s->grad, NULL, err);
+}
+static void depth_destroy(void *self) { (void)self; }
+static const mgs_term_ops depth_image_ops = {"depth-image", depth_active, depth_image, NULL, NULL, NULL, depth_destroy};
+static const mgs_term_ops depth_model_ops = {"depth-model", depth_active, NULL, depth_model, NULL, NULL, depth_destroy};
+
+/* The never-fused ADC's post_backward, also keeping a copy of the full gradient of
+   iteration g_snap_it (the trainer running now writes g_snap). */
+static mgs_status (*adc_post)(void *, mgs_strategy_step *, mgs_error *);
+static mgs_gaussians *g_snap;
+static int g_snap_it;
+static mgs_status snap_post(void *self, mgs_strategy_step *s, mgs_error *err) {
+  if (s->iteration == g_snap_it && s->grad) {
+    mgs_gaussians_destroy(g_snap);
+    g_snap = mgs_gaussians_clone(s->grad);
+  }
+  return adc_post(self, s, err);
+}
+
+static void test_trainer_depth_term(void) {
+  mgs_gaussians *gt = synth_model(150, 42);
+  mgs_dataset *ds = synth_dataset(gt, 6, 1, 48, 40);
+  mgs_train_options o;
+  mgs_train_options_default(&o);
+  o.iterations = 40;
+  o.sh_every = 10;
+  o.adc.densify_from = 1000; /* the image term's gradient also reaches the 2D-mean statistics */
+  o.adc.opacity_reset_every = 0;
+  o.seed = 3;
+  depth_term ti = {0.5, 0, 1, NULL, NULL, NULL, 0}, tis = ti, tm = {0.5, 0, 0, mgs_raster_create(), NULL, NULL, 0};
+  mgs_trainer *a = make_trainer(ds, &o, 1), *as = make_trainer(ds, &o, 0), *c = make_trainer(ds, &o, 1);
+  mgs_error err;
+  CHECK_OK(mgs_trainer_add_term(a, mgs_term_create(&depth_image_ops, &ti), &err), &err);
+  CHECK_OK(mgs_trainer_add_term(as, mgs_term_create(&depth_image_ops, &tis), &err), &err);
+  CHECK_OK(mgs_trainer_run(a, &err), &err);
+  CHECK_OK(mgs_trainer_run(as, &err), &err);
+  CHECK_OK(mgs_trainer_run(c, &err), &err);
+  CHECK(ti.calls == tis.calls && ti.calls == 38);
+  /* fused and separate backward carry the depth gradient alike (their results are equal
+     without it, test_trainer_fused_equals_separate), and it changed the model */
+  const mgs_gaussians *ma = mgs_trainer_model(a), *ms = mgs_trainer_model(as), *mc = mgs_trainer_model(c);
+  CHECK_MSG(ma->n == ms->n && ma->n == mc->n, "counts %zu, %zu, %zu", ma->n, ms->n, mc->n);
+  double moved = 0;
+  if (ma->n == ms->n && ma->n == mc->n)
+    for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
+      mgs_param_group pg = (mgs_param_group)k;
+      size_t len = ma->n * (size_t)mgs_param_dim(pg);
+      double d = rel_diff(mgs_gaussians_group((mgs_gaussians *)ma, pg), mgs_gaussians_group((mgs_gaussians *)ms, pg), len);
+      CHECK_MSG(d <= 1e-5, "fused vs separate: group %s differs by %g", mgs_param_name(pg), d);
+      moved = fmax(moved, rel_diff(mgs_gaussians_group((mgs_gaussians *)ma, pg), mgs_gaussians_group((mgs_gaussians *)mc, pg), len));
+    }
+  CHECK_MSG(moved > 1e-3, "the depth term did not change the model (%g)", moved);
+  /* the gradient of iteration 2 (the term's first; the models are still equal) through the
+     trainer's backward against the term's own render and backward: Adam would turn float
+     rounding in near-zero components into whole steps, so gradients, not models (1e-4 of
+     the largest: the rotations' sums cancel to ~4e-5 in float) */
+  mgs_gaussians *grads[2] = {NULL, NULL};
+  for (int w = 0; w < 2; w++) {
+    depth_term tw = w ? tm : tis;
+    tw.calls = 0;
+    mgs_trainer *t = make_trainer(ds, &o, 0);
+    adc_post = never_fused_ops.post_backward;
+    never_fused_ops.post_backward = snap_post;
+    CHECK_OK(mgs_trainer_add_term(t, mgs_term_create(w ? &depth_model_ops : &depth_image_ops, &tw), &err), &err);
+    g_snap_it = 2;
+    o.iterations = 3;
+    CHECK_OK(mgs_trainer_run(t, &err), &err);
+    grads[w] = g_snap;
+    g_snap = NULL;
+    mgs_trainer_destroy(t);
+    if (w) { free(tw.dd); free(tw.dc); }
+  }
+  CHECK(grads[0] && grads[1] && grads[0]->n == grads[1]->n);
+  if (grads[0] && grads[1] && grads[0]->n == grads[1]->n)
+    for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
+      mgs_param_group pg = (mgs_param_group)k;
+      const float *x = mgs_gaussians_group(grads[0], pg), *y = mgs_gaussians_group(grads[1], pg);
+      size_t len = grads[0]->n * (size_t)mgs_param_dim(pg);
+      double big = 0, diff = 0;
+      for (size_t i = 0; i < len; i++) {
+        big = fmax(big, fabs(x[i]));
+        diff = fmax(diff, fabs((double)x[i] - y[i]));
+      }
+      CHECK_MSG(big > 0 && diff <= 1e-4 * big, "iteration 2: %s gradients differ by %g of %g", mgs_param_name(pg), diff, big);
+    }
+  mgs_gaussians_destroy(grads[0]); mgs_gaussians_destroy(grads[1]);
+  mgs_trainer_destroy(a); mgs_trainer_destroy(as); mgs_trainer_destroy(c);
+  mgs_raster_destroy(tm.r);
+  mgs_dataset_destroy(ds);
+  mgs_gaussians_destroy(gt);
+}
+
 int main(void) {
   RUN(test_fused_equals_separate);
   RUN(test_fused_nonfinite_names_group);
   RUN(test_trainer_fused_equals_separate);
   RUN(test_trainer_terms_fused_equal_separate);
+  RUN(test_trainer_depth_term);
   return mgs_test_finish();
 }

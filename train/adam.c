@@ -7,7 +7,7 @@
 #include "train/mgs_train.h"
 #include "train/adam_internal.h"
 #include "core/mgs_parallel.h"
-#if defined(__AVX512F__)
+#if defined(__AVX512F__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
 
@@ -207,6 +207,25 @@ int mgs_adam_span(const mgs_adam_group *c, size_t b, size_t e) {
     badm |= _mm512_cmp_ps_mask(chk, zero, _CMP_NEQ_UQ);
   }
   bad = badm != 0;
+#elif defined(__AVX2__)
+  /* the same in 8 lanes (GCC leaves the scalar loop scalar on AVX2: sqrt, divide and the
+     finiteness flag); identical results */
+  const __m256 vb1 = _mm256_set1_ps(b1), vb2 = _mm256_set1_ps(b2), vob1 = _mm256_set1_ps(ob1), vob2 = _mm256_set1_ps(ob2);
+  const __m256 vss = _mm256_set1_ps(ss), visb = _mm256_set1_ps(isb), veps = _mm256_set1_ps(eps), zero = _mm256_setzero_ps();
+  __m256 badv = zero;
+  for (; i + 8 <= e; i += 8) {
+    __m256 g = _mm256_loadu_ps(G + i);
+    __m256 m = _mm256_add_ps(_mm256_mul_ps(vb1, _mm256_loadu_ps(M + i)), _mm256_mul_ps(vob1, g));
+    __m256 v = _mm256_add_ps(_mm256_mul_ps(vb2, _mm256_loadu_ps(V + i)), _mm256_mul_ps(_mm256_mul_ps(vob2, g), g));
+    _mm256_storeu_ps(M + i, m);
+    _mm256_storeu_ps(V + i, v);
+    __m256 den = _mm256_add_ps(_mm256_mul_ps(_mm256_sqrt_ps(v), visb), veps);
+    __m256 p = _mm256_sub_ps(_mm256_loadu_ps(P + i), _mm256_div_ps(_mm256_mul_ps(vss, m), den));
+    _mm256_storeu_ps(P + i, p);
+    /* (p - p) + (g - g) is 0 for finite p and g, NaN otherwise; NaN stays NaN in the sum */
+    badv = _mm256_add_ps(badv, _mm256_add_ps(_mm256_sub_ps(p, p), _mm256_sub_ps(g, g)));
+  }
+  bad = _mm256_movemask_ps(_mm256_cmp_ps(badv, zero, _CMP_NEQ_UQ)) != 0;
 #endif
   for (; i < e; i++) {
     float g = G[i];

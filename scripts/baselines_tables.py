@@ -121,6 +121,9 @@ def main():
         print("| %s | %d | %.0f / %.0f = %.2f | %+.2f dB | %.0f / %.0f = %.2f | %s |" % (
             ds, n, gm, g3, gm / g3, pm - p3, tm, t3, tm / t3, "yes" if ok else "no"))
     print("\nholds on %d of %d scenes (target >= 4 of 5)\n" % (cm, tot))
+    print("Train CPU ratios compare runs that may come from different binaries of the experiment: their models are "
+          "the same as one binary's (bit-identical) but up to ~2.5x apart in speed (docs/notes/experiment.md, the binaries of each session); "
+          "read cost from a bench, not from these columns.\n")
 
     print("## Issue 24: SuGaR's mesh and GaussianPro beside the baseline\n")
     print("| scene | n | 3DGS alpha Chamfer | SuGaR mesh Chamfer | lower | SuGaR PSNR - 3DGS | SuGaR Gaussians | n | GaussianPro PSNR - 3DGS | Gaussians GPro / 3DGS | train CPU GPro / 3DGS |")

@@ -598,12 +598,10 @@ void mgs_raster2d_reduce_span(mgs_raster *r, size_t b, size_t e, mgs_gaussians *
     const float *q = r->sgrad + (size_t)r->gauss_off[i] * (size_t)st;
     int any = 0;
     if (nc == 16) { /* one line a slot, zc from the side array */
-      v16f acc = v16f_set1(0.0f);
-      for (uint32_t k = 0; k < cnt; k++, q += st) acc += v16f_load(q);
-      v16f_store(gs, acc);
+      int nz = mgs_sum_rows16(q, cnt, (size_t)st, gs);
       const float *zs = mgs_raster2d_zc_side(r) + r->gauss_off[i];
       for (uint32_t k = 0; k < cnt; k++) gs[S2_ZC] += zs[k];
-      any = v16i_any(v16i_ne((v16i)acc << 1, v16i_set1(0))) || gs[S2_ZC] != 0; /* +-0 is no gradient */
+      any = nz || gs[S2_ZC] != 0; /* +-0 is no gradient */
     } else {
       for (uint32_t k = 0; k < cnt; k++, q += st)
         for (int c = 0; c < nc; c++) gs[c] += q[c];

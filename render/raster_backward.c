@@ -321,14 +321,11 @@ static void reduce_span(const bwd_ctx *bc, size_t b, size_t e, mgs_gaussians *gr
       mgs_raster_project_backward16(r, idx, nl, gsum, grad, gbase, bc->grad_mean2d);
       nl = 0;
     }
-    v16f acc = v16f_set1(0.0f);
+    float gs[16];
     const float *q = r->isect_grad + (size_t)r->gauss_off[i] * GS_STRIDE;
-    for (uint32_t s = 0; s < cnt; s++, q += GS_STRIDE) acc += v16f_load(q);
     /* hidden behind every pixel's last contributor or too faint everywhere: the chain
      * would only push zeros (its gradients stay 0, as its 2D-mean gradient norm) */
-    if (!v16i_any(((v16i)acc << 1) != 0)) continue;
-    float gs[16];
-    v16f_store(gs, acc);
+    if (!mgs_sum_rows16(q, cnt, GS_STRIDE, gs)) continue;
     if (ngrad) mgs_raster_normal_rot_grad(r, i, gs + GS_NX, grad->rot + 4 * (i - gbase));
     idx[nl] = (uint32_t)i;
     for (int c = 0; c < GS_N; c++) gsum[c][nl] = gs[c];

@@ -257,6 +257,29 @@ MGS_VINLINE v8f v8f_rcp(v8f x) { return v8f_set1(1.0f) / x; }
 MGS_VINLINE v8f v8f_exp_neg(v8f x) { MGS_EXP_NEG_BODY(v8f, v8i, v8f_set1, v8f_max, v8f_fma) }
 #endif
 
+/* out[0..16) = the lane-wise sum, in row order from +0, of n rows of 16 floats st floats
+ * apart (what a v16f accumulator gives, bit for bit); nonzero when a lane of the sum is
+ * nonzero (+-0 count as zero, NaN as nonzero). On AVX2 without AVX-512 the accumulator is
+ * two 8-lane registers: GCC kept a 64-byte one on the stack there, a store and two reloads
+ * per row, and tested the lanes one by one. */
+MGS_VINLINE int mgs_sum_rows16(const float *q, uint32_t n, size_t st, float out[16]) {
+#if defined(MGS_ROWS8)
+  v8f a0 = v8f_set1(0.0f), a1 = a0;
+  for (uint32_t k = 0; k < n; k++, q += st) {
+    a0 += v8f_half(q, 0);
+    a1 += v8f_half(q, 8);
+  }
+  v8f_put(out, 0, a0);
+  v8f_put(out, 8, a1);
+  return v8i_any(((v8i)a0 << 1) | ((v8i)a1 << 1));
+#else
+  v16f acc = v16f_set1(0.0f);
+  for (uint32_t k = 0; k < n; k++, q += st) acc += v16f_load(q);
+  v16f_store(out, acc);
+  return v16i_any(((v16i)acc << 1) != 0);
+#endif
+}
+
 /* exp(x) over the float range (Cephes, about 1 ulp); x clamped to [-87, 88] so the result
  * stays a normal float (e^88 ~ 1.7e38: still overflows whatever it multiplies). */
 MGS_VINLINE v16f v16f_exp(v16f x) {

@@ -107,6 +107,36 @@ static void test_masks(void) {
   CHECK_MSG(n_bad == 0, "%d masks differ", n_bad);
 }
 
+/* mgs_sum_rows16 against a scalar sum in row order from +0: n = 0..6 rows at strides 16
+ * and 19, lanes drawn from the special and random values (NaN compared by class); the flag
+ * against "some lane is neither +0 nor -0". */
+static void test_sum_rows(void) {
+  n_bad = 0;
+  float rows[6 * 19];
+  uint32_t s = 777u;
+  for (int trial = 0; trial < 4000; trial++) {
+    int n = trial % 7;
+    size_t st = trial % 2 ? 19 : 16;
+    for (size_t k = 0; k < 6 * 19; k++) {
+      s ^= s << 13; s ^= s >> 17; s ^= s << 5;
+      /* mostly zeros of either sign (the flag's case), some small values, some specials */
+      uint32_t pick = s % 16u;
+      rows[k] = pick < 8 ? (pick & 1 ? -0.0f : 0.0f) : pick < 14 ? (float)(int32_t)(s >> 20) * 1e-3f : vals[(s >> 8) % (uint32_t)nvals];
+    }
+    float out[16];
+    int flag = mgs_sum_rows16(rows, (uint32_t)n, st, out), wflag = 0;
+    for (int l = 0; l < 16; l++) {
+      float a = 0.0f;
+      for (int k = 0; k < n; k++) a += rows[(size_t)k * st + (size_t)l];
+      wflag |= (fbits(a) << 1) != 0;
+      int same = fbits(out[l]) == fbits(a) || (isnan(out[l]) && isnan(a));
+      if (!same) bad("sum_rows", (float)n, (float)l, fbits(out[l]), fbits(a));
+    }
+    if (flag != wflag) bad("sum_rows flag", (float)n, (float)st, (uint32_t)flag, (uint32_t)wflag);
+  }
+  CHECK_MSG(n_bad == 0, "%d sums or flags differ", n_bad);
+}
+
 int main(void) {
   build_values();
 #if defined(MGS_V16_HALVES)
@@ -115,5 +145,6 @@ int main(void) {
   RUN(test_binary);
   RUN(test_unary);
   RUN(test_masks);
+  RUN(test_sum_rows);
   return mgs_test_finish();
 }

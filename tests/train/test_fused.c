@@ -186,18 +186,23 @@ static mgs_trainer *make_trainer(mgs_dataset *ds, const mgs_train_options *o, in
   return t;
 }
 
+/* 60 iterations with ADC's densification, resets and SH steps inside them. */
+static void short_run_options(mgs_train_options *o) {
+  mgs_train_options_default(o);
+  o->iterations = 60;
+  o->sh_every = 10;
+  o->adc.densify_from = 5;
+  o->adc.densify_every = 10;
+  o->adc.opacity_reset_every = 25;
+  o->adc.densify_until = 45;
+  o->seed = 3;
+}
+
 static void test_trainer_fused_equals_separate(void) {
   mgs_gaussians *gt = synth_model(150, 42);
   mgs_dataset *ds = synth_dataset(gt, 6, 1, 48, 40);
   mgs_train_options o;
-  mgs_train_options_default(&o);
-  o.iterations = 60;
-  o.sh_every = 10;
-  o.adc.densify_from = 5;
-  o.adc.densify_every = 10;
-  o.adc.opacity_reset_every = 25;
-  o.adc.densify_until = 45;
-  o.seed = 3;
+  short_run_options(&o);
   mgs_trainer *a = make_trainer(ds, &o, 1), *b = make_trainer(ds, &o, 0);
   mgs_error err;
   CHECK_OK(mgs_trainer_run(a, &err), &err);
@@ -254,14 +259,7 @@ static void test_trainer_terms_fused_equal_separate(void) {
   mgs_gaussians *gt = synth_model(150, 42);
   mgs_dataset *ds = synth_dataset(gt, 6, 1, 48, 40);
   mgs_train_options o;
-  mgs_train_options_default(&o);
-  o.iterations = 60;
-  o.sh_every = 10;
-  o.adc.densify_from = 5;
-  o.adc.densify_every = 10;
-  o.adc.opacity_reset_every = 25;
-  o.adc.densify_until = 45;
-  o.seed = 3;
+  short_run_options(&o);
   pull_term pa[2] = {{0.05, 0}, {0.02, 0}}, pb[2] = {{0.05, 0}, {0.02, 0}};
   mgs_trainer *a = make_trainer(ds, &o, 1), *b = make_trainer(ds, &o, 0), *c = make_trainer(ds, &o, 1);
   mgs_error err;
@@ -351,12 +349,10 @@ static void test_trainer_depth_term(void) {
   mgs_gaussians *gt = synth_model(150, 42);
   mgs_dataset *ds = synth_dataset(gt, 6, 1, 48, 40);
   mgs_train_options o;
-  mgs_train_options_default(&o);
+  short_run_options(&o);
   o.iterations = 40;
-  o.sh_every = 10;
   o.adc.densify_from = 1000; /* the image term's gradient also reaches the 2D-mean statistics */
   o.adc.opacity_reset_every = 0;
-  o.seed = 3;
   depth_term ti = {0.5, 0, 1, NULL, NULL, NULL, 0}, tis = ti, tm = {0.5, 0, 0, mgs_raster_create(), NULL, NULL, 0};
   mgs_trainer *a = make_trainer(ds, &o, 1), *as = make_trainer(ds, &o, 0), *c = make_trainer(ds, &o, 1);
   mgs_error err;

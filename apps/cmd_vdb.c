@@ -7,7 +7,9 @@
  * rendered depth fused at the run's cameras (measure/mgs_depth_fusion.h) is `sdf` (the first
  * level set: what `persistence` and --mesh take), with the fusion's `tsdf` and
  * `tsdf_weight`, and the α-field's grids beside it as `density` and `sdf_alpha`
- * (docs/notes/depth-fusion.md: why this is the default for run folders). */
+ * (docs/notes/depth-fusion.md: why this is the default for run folders) — unless the
+ * α-field's surface agrees better with the renders (measure/mgs_surface_choice.h): then it
+ * is `sdf` and the fused one `sdf_fused`. */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -15,6 +17,7 @@
 #include <string.h>
 #include "apps/mgs_cli.h"
 #include "measure/mgs_depth_fusion.h"
+#include "measure/mgs_surface_choice.h"
 #include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
@@ -28,7 +31,10 @@ static void usage(FILE *f) {
           "  -o, --output OUT.vdb     output file (grids 'density' and 'sdf')\n"
           "  SCENE.ply: the alpha-field's surface (density, sdf); RUN (a run folder): the surface\n"
           "  of the rendered depth fused at RUN/cameras.json as sdf (tsdf, tsdf_weight beside it)\n"
-          "  plus the alpha-field's as density and sdf_alpha\n"
+          "  plus the alpha-field's as density and sdf_alpha; where the alpha-field's surface agrees better\n"
+          "  with the model's renders (parts a few pixels thick) it is sdf and the fused one sdf_fused\n"
+          "  --surface auto|fused|alpha  run folder: which surface is sdf (and --mesh) (auto: the one\n"
+          "                           closer to the views' rendered depth, both directions)\n"
           "  --from-depth             depth fusion also for a bare .ply (virtual views)\n"
           "  --from-alpha             the alpha-field's surface only, also for a run folder\n"
           "  --no-alpha               depth fusion without the alpha-field's grids\n"
@@ -92,7 +98,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
       {"sugar-mesh", no_argument, 0, 'g'},       {"sugar-level", required_argument, 0, 'l'},
       {"sugar-points", required_argument, 0, 'p'}, {"sugar-triangles", required_argument, 0, 'q'},
-      {"sugar-trim", required_argument, 0, 'u'},
+      {"sugar-trim", required_argument, 0, 'u'}, {"surface", required_argument, 0, 'j'},
       {"help", no_argument, 0, 'H'},              {0, 0, 0, 0}};
   const char *out = NULL, *mesh_out = NULL;
   mgs_vdb_alpha_params ap;
@@ -101,6 +107,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
   mgs_vdb_sdf_params_default(&sp);
   double adaptivity = 0, v = 0;
   int force = 0, c, from_depth = 0, from_alpha = 0, no_alpha = 0;
+  int surface = -1; /* -1 auto, 0 fused, 1 alpha */
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
   int sugar = 0;
@@ -173,6 +180,12 @@ int mgs_cmd_vdb(int argc, char **argv) {
       case 'C': fo.carve = 1; break;
       case 'A': from_alpha = 1; break;
       case 'N': no_alpha = 1; break;
+      case 'j':
+        if (!strcmp(optarg, "auto")) surface = -1;
+        else if (!strcmp(optarg, "fused")) surface = 0;
+        else if (!strcmp(optarg, "alpha")) surface = 1;
+        else { fprintf(stderr, "morsegs vdb: --surface '%s': expected auto, fused or alpha\n", optarg); return 2; }
+        break;
       case 'I': case 'V':
         if (!parse_double(optarg, &v) || v < (c == 'V') || v > 1e6 || v != floor(v)) {
           fprintf(stderr, "morsegs vdb: --%s '%s' must be an integer%s\n", c == 'V' ? "views" : "iteration", optarg,
@@ -239,6 +252,12 @@ int mgs_cmd_vdb(int argc, char **argv) {
   const char *in_arg = argv[optind];
   fo.half_width = sp.half_width;
   const int fuse = !from_alpha && (from_depth || mgs_is_dir(in_arg));
+  if (surface != -1 && (!fuse || no_alpha)) {
+    fprintf(stderr, "morsegs vdb: --surface chooses between the fused and the alpha-field's surface: it needs both "
+                    "(a run folder or --from-depth, without --no-alpha or --from-alpha)\n");
+    return 2;
+  }
+  if (fuse && !no_alpha && surface == -1) fo.keep_points = MGS_SURFACE_POINTS;
   if (mesh_out) {
     const char *ext = strrchr(mesh_out, '.');
     if (!ext || (strcmp(ext, ".ply") && strcmp(ext, ".obj"))) {
@@ -258,7 +277,8 @@ int mgs_cmd_vdb(int argc, char **argv) {
 
   mgs_gaussians *g = NULL;
   mgs_vdb_grid *alpha = NULL, *sdf = NULL, *density = NULL, *fsdf = NULL, *tsdf = NULL, *weight = NULL;
-  mgs_mesh *mesh = NULL;
+  mgs_mesh *mesh = NULL, *amesh = NULL;
+  int alpha_first = surface == 1;
   mgs_vdb_build_info info;
   memset(&info, 0, sizeof info);
   mgs_fusion_report rep;
@@ -274,7 +294,10 @@ int mgs_cmd_vdb(int argc, char **argv) {
              rep.views, rep.virtual_views ? "virtual " : "", rep.image_masks, rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected",
              rep.footprint, rep.voxel_size, rep.truncation, rep.truncation / rep.footprint, rep.blocks, rep.observed,
              rep.band_voxels, rep.seconds);
-    if (mesh_out && mgs_vdb_extract_mesh(fsdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in_arg); goto done; }
+    if ((mesh_out || fo.keep_points) && mgs_vdb_extract_mesh(fsdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) {
+      name_input(&err, in_arg);
+      goto done;
+    }
     if (no_alpha) goto write;
   }
   if (mgs_ply_read_gaussians_local(in, NULL, &g, &err) != MGS_OK) goto done; /* far models: a local frame, g->origin */
@@ -293,6 +316,28 @@ int mgs_cmd_vdb(int argc, char **argv) {
   for (int k = 0; k < 2; k++) mgs_vdb_grid_translate(k ? sdf : density, g->origin); /* world coordinates */
   /* The mesh first, so a failure (e.g. no surface) leaves no output at all. */
   if (!fuse && mesh_out && mgs_vdb_extract_mesh(sdf, 0.0, adaptivity, &mesh, &err) != MGS_OK) { name_input(&err, in); goto done; }
+  if (fuse && ((mesh_out && surface == 1) || fo.keep_points) && mgs_vdb_grid_active_voxel_count(sdf) &&
+      mgs_vdb_extract_mesh(sdf, 0.0, adaptivity, &amesh, &err) != MGS_OK) {
+    name_input(&err, in);
+    goto done;
+  }
+  if (fo.keep_points) { /* --surface auto: the one closer to the renders (measure/mgs_surface_choice.h) */
+    mgs_surface_agreement af, aa;
+    const int pick = mgs_surface_choose(rep.points, rep.n_points, mesh, amesh, MGS_SURFACE_CAP_FP * rep.footprint, &af, &aa, &err);
+    if (pick < 0) { name_input(&err, in_arg); goto done; }
+    alpha_first = pick;
+    mgs_info("surface choice: fused %.4g (to it %.4g, from it %.4g), alpha-field %.4g (%.4g, %.4g) over %zu rendered "
+             "points -> %s", af.score, af.to_surface, af.from_surface, aa.score, aa.to_surface, aa.from_surface,
+             rep.n_points, pick ? "alpha-field" : "fused");
+  }
+  if (alpha_first && mesh_out) { /* --mesh writes the surface that is sdf */
+    mgs_mesh_destroy(mesh);
+    mesh = amesh;
+    amesh = NULL;
+  } else if (!mesh_out) {
+    mgs_mesh_destroy(mesh);
+    mesh = NULL;
+  }
   mgs_vdb_grid_destroy(alpha);
   alpha = NULL;
 write:
@@ -304,14 +349,23 @@ write:
     snprintf(meta.source, sizeof meta.source, "%s", fuse ? in_arg : in);
     const mgs_vdb_grid *grids[5];
     size_t ng = 0;
-    if (fuse) {
-      grids[ng++] = fsdf; /* first: the level set persistence and viewers pick */
+    if (fuse && alpha_first && sdf) { /* first: the level set persistence and viewers pick */
+      mgs_vdb_grid_set_name(fsdf, "sdf_fused");
+      grids[ng++] = sdf;
+      grids[ng++] = fsdf;
       grids[ng++] = tsdf;
       grids[ng++] = weight;
-      if (sdf) mgs_vdb_grid_set_name(sdf, "sdf_alpha");
+      grids[ng++] = density;
+    } else {
+      if (fuse) {
+        grids[ng++] = fsdf;
+        grids[ng++] = tsdf;
+        grids[ng++] = weight;
+        if (sdf) mgs_vdb_grid_set_name(sdf, "sdf_alpha");
+      }
+      if (density) grids[ng++] = density;
+      if (sdf) grids[ng++] = sdf;
     }
-    if (density) grids[ng++] = density;
-    if (sdf) grids[ng++] = sdf;
     if (mgs_vdb_write(out, grids, ng, NULL, 0, &meta, &err) != MGS_OK) goto done;
   }
   if (mesh) {
@@ -319,18 +373,21 @@ write:
     mgs_info("mesh: %zu vertices, %zu triangles -> %s", mesh->nv, mesh->nt, mesh_out);
   }
   if (fuse)
-    printf("%s: sdf (depth fusion of %zu %sviews, %s depth) %zu active voxels, voxel size %g, truncation %g (%.3g pixel "
-           "footprints)%s, %.2f s, peak RSS %.1f MiB\n", out, rep.views, rep.virtual_views ? "virtual " : "",
-           rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.band_voxels, rep.voxel_size, rep.truncation,
-           rep.truncation / rep.footprint, sdf ? "; alpha-field: density, sdf_alpha" : "", mgs_now() - t0,
-           mgs_peak_rss() / 1048576.0);
+    printf("%s: %s (depth fusion of %zu %sviews, %s depth) %zu active voxels, voxel size %g, truncation %g (%.3g pixel "
+           "footprints)%s, %.2f s, peak RSS %.1f MiB\n", out, alpha_first && sdf ? "sdf_fused" : "sdf", rep.views,
+           rep.virtual_views ? "virtual " : "", rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.band_voxels,
+           rep.voxel_size, rep.truncation, rep.truncation / rep.footprint,
+           !sdf ? "" : alpha_first ? "; alpha-field: sdf (it agrees better with the renders), density" : "; alpha-field: density, sdf_alpha",
+           mgs_now() - t0, mgs_peak_rss() / 1048576.0);
   else
     printf("%s: density %zu + sdf %zu active voxels, voxel size %g, tau %g, %.2f s, peak RSS %.1f MiB\n", out,
            mgs_vdb_grid_active_voxel_count(density), mgs_vdb_grid_active_voxel_count(sdf), info.voxel_size, sp.tau,
            mgs_now() - t0, mgs_peak_rss() / 1048576.0);
   rc = 0;
 done:
+  free(rep.points);
   mgs_mesh_destroy(mesh);
+  mgs_mesh_destroy(amesh);
   mgs_vdb_grid_destroy(alpha);
   mgs_vdb_grid_destroy(sdf);
   mgs_vdb_grid_destroy(density);

@@ -123,6 +123,21 @@ mgs_status mgs_virtual_views(const mgs_gaussians *g, int n, int size, mgs_camera
 }
 
 /* ---- fusion ---- */
+/* Every stride-th foreground pixel of a masked depth map, back-projected to world xyz. */
+static void keep_points(const mgs_camera *cam, const float *depth, size_t stride, size_t cap, mgs_fusion_report *rep) {
+  size_t np = (size_t)cam->width * cam->height, c = 0;
+  double o[3], d[3], axis[3];
+  mgs_camera_ray(cam, cam->cx, cam->cy, o, axis); /* the optical axis */
+  for (size_t p = 0; p < np && rep->n_points < cap; p++) {
+    if (!(depth[p] > 0) || c++ % stride) continue;
+    mgs_camera_ray(cam, (double)(p % cam->width) + 0.5, (double)(p / cam->width) + 0.5, o, d);
+    /* depth is camera z: along the unit ray that is z / (d . optical axis) */
+    const double t = depth[p] / (d[0] * axis[0] + d[1] * axis[1] + d[2] * axis[2]);
+    float *q = rep->points + 3 * rep->n_points++;
+    for (int i = 0; i < 3; i++) q[i] = (float)(o[i] + t * d[i]);
+  }
+}
+
 static double median_d(double *v, size_t n) {
   if (!n) return NAN;
   for (size_t i = 1; i < n; i++) /* insertion sort: n is a few hundred views */
@@ -161,6 +176,8 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   rep->views = n;
   rep->views_empty = 0;
   rep->depth = kind;
+  rep->points = NULL;
+  rep->n_points = 0;
   if (n == 0) return mgs_error_set(err, MGS_ERR_ARG, "depth fusion: no views");
   size_t maxpix = 0;
   for (size_t k = 0; k < n; k++) {
@@ -174,11 +191,12 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   mgs_status st = MGS_OK;
   if (!depth || !alpha || !fp) { st = mgs_error_set(err, MGS_ERR_NOMEM, "depth fusion: out of memory"); goto done; }
   /* pass 1: the footprint (median over views of the median foreground depth / focal) */
-  size_t nfp = 0;
+  size_t nfp = 0, fg_sum = 0;
   for (size_t k = 0; k < n; k++) {
     size_t fg = 0, np = (size_t)cams[k].width * cams[k].height;
     if ((st = render_masked(src, &cams[k], masks ? masks[k] : NULL, kind, o->alpha_mask, o->carve, depth, alpha, &fg, err))) goto done;
     if (!fg) { rep->views_empty++; continue; }
+    fg_sum += fg;
     float *d = malloc(fg * sizeof(float));
     if (!d) { st = mgs_error_set(err, MGS_ERR_NOMEM, "depth fusion: out of memory"); goto done; }
     size_t c = 0;
@@ -222,6 +240,13 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   }
   if ((st = mgs_vdb_tsdf_create(&tp, &t, err))) goto done;
   /* pass 2: fuse in batches */
+  size_t stride = 1, cap_pts = 0;
+  if (o->keep_points) { /* an even subsample: every stride-th foreground pixel of every view */
+    cap_pts = o->keep_points;
+    stride = fg_sum / cap_pts + 1;
+    rep->points = malloc(3 * cap_pts * sizeof(float));
+    if (!rep->points) { st = mgs_error_set(err, MGS_ERR_NOMEM, "depth fusion: out of memory"); goto done; }
+  }
   mgs_vdb_tsdf_info info;
   memset(&info, 0, sizeof info);
   for (size_t k0 = 0; k0 < n; k0 += nb) {
@@ -233,6 +258,7 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
       if ((st = render_masked(src, &cams[k0 + j], masks ? masks[k0 + j] : NULL, kind, o->alpha_mask, o->carve, d, alpha, &fg, err)))
         goto done;
       dp[j] = d;
+      if (cap_pts) keep_points(&cams[k0 + j], d, stride, cap_pts, rep);
     }
     if ((st = mgs_vdb_tsdf_integrate(t, kn, cams + k0, dp, &info, err))) goto done;
   }
@@ -254,6 +280,11 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   }
 done:
   rep->seconds = mgs_now() - t0;
+  if (st != MGS_OK || rep == &local) {
+    free(rep->points);
+    rep->points = NULL;
+    rep->n_points = 0;
+  }
   mgs_vdb_tsdf_destroy(t);
   free(depth); free(alpha); free(fp); free(tmp);
   return st;
@@ -362,5 +393,6 @@ done:
   free(cams);
   free(ply);
   mgs_gaussians_destroy(g);
+  if (rep == &local) free(local.points);
   return st;
 }

@@ -6,10 +6,13 @@
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "measure/mgs_depth_fusion.h"
 #include "core/mgs_log.h"
 #include "core/mgs_mesh.h"
 #include "measure/mesh_pieces.h"
+#include "measure/mgs_surface_choice.h"
 #include "render/mgs_mesh_distance.h"
 
 #define EVAL_SAMPLES 100000
@@ -19,12 +22,14 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
                             void *cjson_object_out, char *table_out, size_t table_len) {
   cJSON *obj = (cJSON *)cjson_object_out;
   mgs_error err = {0};
-  mgs_mesh *gt = NULL, *surf = NULL;
+  mgs_mesh *gt = NULL, *surf = NULL, *asurf = NULL;
   mgs_vdb_grid *sdf = NULL;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
   if (opts) fo = *opts;
+  fo.keep_points = MGS_SURFACE_POINTS; /* the no-ground-truth choice `morsegs vdb RUN` makes */
   mgs_fusion_report rep;
+  memset(&rep, 0, sizeof rep);
   mgs_geometry_metrics gm;
   int rc = 1;
   const double t0 = mgs_now();
@@ -44,6 +49,12 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
   }
   long chi = 0;
   size_t pieces = mgs_mesh_pieces(surf, &chi);
+  /* which surface `morsegs vdb RUN` makes `sdf` (measure/mgs_surface_choice.h) */
+  mgs_surface_agreement af = {0}, aa = {0};
+  int pick = -1;
+  if (mgs_alpha_surface_mesh(rep.ply, &asurf, &err) == MGS_OK)
+    pick = mgs_surface_choose(rep.points, rep.n_points, surf, asurf, MGS_SURFACE_CAP_FP * rep.footprint, &af, &aa, &err);
+  if (pick < 0) mgs_warn("eval geometry: the choice between the two surfaces failed: %s", err.msg);
   if (obj) {
     mgs_eval_geometry_add_metrics(obj, &gm);
     cJSON_AddStringToObject(obj, "depth", rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected");
@@ -61,6 +72,13 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
     cJSON_AddNumberToObject(obj, "surface_triangles", (double)surf->nt);
     cJSON_AddNumberToObject(obj, "surface_pieces", (double)pieces);
     cJSON_AddNumberToObject(obj, "surface_euler", (double)chi);
+    if (pick >= 0) {
+      cJSON *ch = cJSON_AddObjectToObject(obj, "surface_choice");
+      cJSON_AddStringToObject(ch, "sdf", pick ? "alpha" : "fused");
+      cJSON_AddNumberToObject(ch, "fused_agreement", af.score);
+      cJSON_AddNumberToObject(ch, "alpha_agreement", aa.score);
+      cJSON_AddNumberToObject(ch, "points", (double)rep.n_points);
+    }
     cJSON_AddNumberToObject(obj, "seconds", mgs_now() - t0);
   }
   if (table_out && table_len)
@@ -71,9 +89,17 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
              gm.chamfer, gm.accuracy, gm.completeness, gm.offset, gm.fscore, rep.views, rep.virtual_views ? "virtual " : "",
              rep.depth == MGS_DEPTH_MEDIAN ? "median" : "expected", rep.voxel_size, rep.truncation / rep.footprint,
              surf->nt, pieces, chi);
+  if (table_out && table_len && pick >= 0) {
+    size_t used = strlen(table_out);
+    snprintf(table_out + used, table_len - used,
+             "  default surface (sdf) %s: agreement with the renders fused %.4g, alpha-field %.4g (lower wins)\n",
+             pick ? "the alpha-field's" : "the depth-fused one", af.score, aa.score);
+  }
   rc = 0;
 done:
+  free(rep.points);
   mgs_mesh_destroy(surf);
+  mgs_mesh_destroy(asurf);
   mgs_mesh_destroy(gt);
   mgs_vdb_grid_destroy(sdf);
   return rc;

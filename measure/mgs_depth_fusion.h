@@ -47,6 +47,7 @@ typedef struct mgs_fusion_opts {
   int iteration;             /* run folder: point_cloud/iteration_N (-1: latest) */
   int image_alpha;           /* use the dataset images' alpha as masks when available (1) */
   int carve;                 /* background pixels carve free space (0: it erodes; docs/notes/depth-fusion.md) */
+  size_t keep_points;        /* > 0: keep up to this many of the views' surface points in the report (0) */
 } mgs_fusion_opts;
 void mgs_fusion_opts_default(mgs_fusion_opts *o);
 
@@ -60,6 +61,9 @@ typedef struct mgs_fusion_report {
   size_t blocks, observed, band_voxels;
   double seconds;
   char ply[1024];             /* the model fused */
+  float *points;              /* opts.keep_points: foreground pixels back-projected at their depth, world
+                                 xyz, an even subsample of every view's (malloc'd: the caller frees) */
+  size_t n_points;
 } mgs_fusion_report;
 
 /* Virtual cameras on a sphere (Fibonacci) around the model's opaque core, looking at its

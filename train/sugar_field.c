@@ -29,19 +29,24 @@ static double quad(const mgs_gauss_local *L, const double p[3], double d[3], dou
 
 void mgs_sugar_field(const mgs_gaussians *g, const double p[3], const uint32_t *nb, int k, double factor,
                      mgs_sugar_value *v) {
+  mgs_sugar_field_with(g, NULL, p, nb, k, factor, v);
+}
+
+void mgs_sugar_field_with(const mgs_gaussians *g, const mgs_sugar_locals *t, const double p[3], const uint32_t *nb,
+                          int k, double factor, mgs_sugar_value *v) {
   memset(v, 0, sizeof *v);
   double beta = 0;
   for (int j = 0; j < k; j++) {
-    mgs_gauss_local L;
-    mgs_gauss_local_get(g, nb[j], &L);
+    mgs_gauss_local tmp;
+    const mgs_gauss_local *L = mgs_sugar_local(g, t, nb[j], &tmp);
     double d[3], y[3];
-    double e = factor * L.alpha * exp(-0.5 * quad(&L, p, d, y));
+    double e = factor * L->alpha * exp(-0.5 * quad(L, p, d, y));
     v->density += e;
     for (int a = 0; a < 3; a++) { /* ∂e/∂p = −e Σ_a (y_a/s_a²) R[:,a] */
-      double c = -e * y[a] / L.s2[a];
-      for (int b = 0; b < 3; b++) v->grad[b] += c * L.R[3 * b + a];
+      double c = -e * y[a] / L->s2[a];
+      for (int b = 0; b < 3; b++) v->grad[b] += c * L->R[3 * b + a];
     }
-    beta += sqrt(L.s2[mgs_sugar_min_axis(L.s2)]);
+    beta += sqrt(L->s2[mgs_sugar_min_axis(L->s2)]);
   }
   v->beta = k > 0 ? beta / k : 0;
   double dc = v->density > MGS_SUGAR_DMIN ? v->density : MGS_SUGAR_DMIN;
@@ -55,17 +60,18 @@ void mgs_sugar_gaussian_normal(const mgs_gaussians *g, size_t i, double n[3]) {
   for (int b = 0; b < 3; b++) n[b] = L.R[3 * b + a];
 }
 
-void mgs_sugar_sdf_rows(const mgs_gaussians *g, const double p[3], const uint32_t *nb, int k, double factor,
-                        double w, double *rows) {
+void mgs_sugar_sdf_rows(const mgs_gaussians *g, const mgs_sugar_locals *t, const double p[3], const uint32_t *nb,
+                        int k, double factor, double w, double *rows) {
   memset(rows, 0, (size_t)k * MGS_SUGAR_ROW * sizeof *rows);
-  mgs_gauss_local L[MGS_SUGAR_KMAX];
+  mgs_gauss_local tmp[MGS_SUGAR_KMAX];
+  const mgs_gauss_local *L[MGS_SUGAR_KMAX];
   double e[MGS_SUGAR_KMAX], dsum = 0, beta = 0;
   for (int j = 0; j < k; j++) {
-    mgs_gauss_local_get(g, nb[j], &L[j]);
+    L[j] = mgs_sugar_local(g, t, nb[j], &tmp[j]);
     double dd[3], y[3];
-    e[j] = factor * L[j].alpha * exp(-0.5 * quad(&L[j], p, dd, y));
+    e[j] = factor * L[j]->alpha * exp(-0.5 * quad(L[j], p, dd, y));
     dsum += e[j];
-    beta += sqrt(L[j].s2[mgs_sugar_min_axis(L[j].s2)]);
+    beta += sqrt(L[j]->s2[mgs_sugar_min_axis(L[j]->s2)]);
   }
   beta /= k;
   if (dsum >= MGS_SUGAR_DMAX) return; /* inside: f = 0, no gradient */
@@ -77,25 +83,25 @@ void mgs_sugar_sdf_rows(const mgs_gaussians *g, const double p[3], const uint32_
   for (int j = 0; j < k; j++) {
     double *r = rows + (size_t)j * MGS_SUGAR_ROW;
     double dd[3], y[3];
-    quad(&L[j], p, dd, y);
+    quad(L[j], p, dd, y);
     double ge = w * gd; /* ∂(w f)/∂e_j */
     /* e = c α exp(−q/2): ∂e/∂logit = e (1 − α); ∂e/∂q = −e/2 */
-    r[MGS_SUGAR_ROW_OPACITY] = ge * e[j] * (1 - L[j].alpha);
+    r[MGS_SUGAR_ROW_OPACITY] = ge * e[j] * (1 - L[j]->alpha);
     double gq = -0.5 * ge * e[j];
     double dR[9] = {0};
     for (int a = 0; a < 3; a++) {
-      double ya = y[a] / L[j].s2[a];
+      double ya = y[a] / L[j]->s2[a];
       for (int b = 0; b < 3; b++) {
-        r[MGS_SUGAR_ROW_MEAN + b] += gq * -2 * ya * L[j].R[3 * b + a]; /* ∂q/∂μ = −2 Σ ya R[:,a] */
+        r[MGS_SUGAR_ROW_MEAN + b] += gq * -2 * ya * L[j]->R[3 * b + a]; /* ∂q/∂μ = −2 Σ ya R[:,a] */
         dR[3 * b + a] = gq * 2 * ya * dd[b];                               /* ∂q/∂R[b][a] */
       }
-      if (!L[j].ls_clamped[a]) r[MGS_SUGAR_ROW_SCALE + a] = gq * -2 * y[a] * ya; /* ∂q/∂log s_a */
+      if (!L[j]->ls_clamped[a]) r[MGS_SUGAR_ROW_SCALE + a] = gq * -2 * y[a] * ya; /* ∂q/∂log s_a */
     }
     /* β = mean of the smallest scales: ∂β/∂log s_min = s_min / k */
-    int am = mgs_sugar_min_axis(L[j].s2);
-    if (!L[j].ls_clamped[am]) r[MGS_SUGAR_ROW_SCALE + am] += w * gb * sqrt(L[j].s2[am]) / k;
+    int am = mgs_sugar_min_axis(L[j]->s2);
+    if (!L[j]->ls_clamped[am]) r[MGS_SUGAR_ROW_SCALE + am] += w * gb * sqrt(L[j]->s2[am]) / k;
     double dq[4];
-    mgs_gauss_local_dq(&L[j], dR, dq);
+    mgs_gauss_local_dq(L[j], dR, dq);
     for (int c = 0; c < 4; c++) r[MGS_SUGAR_ROW_ROT + c] = dq[c];
   }
 }

@@ -307,7 +307,33 @@ static void test_gradients(void) {
   mgs_gaussians_destroy(g);
 }
 
-/* Bad input: a sample naming a Gaussian out of range, σ = 0. */
+/* The losses read each Gaussian's local frame from a table built once per evaluation; the
+ * public mgs_sugar_field rebuilds it per call. Both are the same code on the same doubles, so
+ * the SDF loss value must equal the sum of mgs_sugar_field's terms exactly (training with the
+ * table gave a byte-identical model: docs/benchmarks.md, "SuGaR's term"). */
+static void test_table_exact(void) {
+  mgs_gaussians *g = random_model(40, 21, 0.3, 0);
+  uint32_t *knn;
+  int k;
+  mgs_error err;
+  CHECK_OK(mgs_sugar_knn(g, 8, &knn, &k, &err), &err);
+  const size_t m = 64;
+  mgs_sugar_sample *s = samples(g, knn, k, m, 5);
+  double v = 0, direct = 0;
+  const double w = 0.7, sigma = 0.3, wm = w / (double)m;
+  CHECK_OK(mgs_sugar_sdf_loss(g, knn, k, s, m, 1.0 / 16, sigma, w, NULL, &v, &err), &err);
+  for (size_t i = 0; i < m; i++) {
+    mgs_sugar_value f;
+    mgs_sugar_field(g, s[i].p, knn + (size_t)s[i].gauss * (size_t)k, k, 1.0 / 16, &f);
+    direct += wm * fabs(f.sdf - s[i].target) / sigma;
+  }
+  CHECK_MSG(v == direct && v > 0, "table %.17g, rebuilt %.17g", v, direct);
+  free(s);
+  free(knn);
+  mgs_gaussians_destroy(g);
+}
+
+/* Bad input: a sample naming a Gaussian out of range, a neighbour list naming one, σ = 0. */
 static void test_errors(void) {
   mgs_gaussians *g = random_model(4, 1, 0.3, 0);
   uint32_t knn[16] = {0};
@@ -317,6 +343,10 @@ static void test_errors(void) {
   CHECK(mgs_sugar_sdf_loss(g, knn, 4, &s, 1, 1, 1, 1, NULL, &v, &err) == MGS_ERR_ARG);
   CHECK(strstr(err.msg, "Gaussian 9") != NULL);
   s.gauss = 0;
+  knn[2] = 7;
+  CHECK(mgs_sugar_normal_loss(g, knn, 4, &s, 1, 1, NULL, NULL, 1, NULL, &v, &err) == MGS_ERR_ARG);
+  CHECK(strstr(err.msg, "neighbour list names Gaussian 7") != NULL);
+  knn[2] = 0;
   CHECK(mgs_sugar_sdf_loss(g, knn, 4, &s, 1, 1, 0, 1, NULL, &v, &err) == MGS_ERR_ARG);
   mgs_gaussians_destroy(g);
 }
@@ -327,6 +357,7 @@ int main(void) {
   test_flat();
   test_knn();
   test_gradients();
+  test_table_exact();
   test_errors();
   return mgs_test_finish();
 }

@@ -116,26 +116,37 @@ static void locals_range(void *ctx, size_t b, size_t e) {
   for (size_t u = b; u < e; u++) mgs_gauss_local_get(j->g, j->idx[u], &j->loc[u]);
 }
 
-static int locals_build(const loss_job *j, size_t m, mgs_sugar_locals *t) {
+/* Also checks that the neighbour lists name Gaussians of this model (the one walk over them). */
+static mgs_status locals_build(const loss_job *j, size_t m, mgs_sugar_locals *t, mgs_error *err) {
   const size_t n = j->g->n;
+  t->loc = NULL;
   t->slot = malloc((n ? n : 1) * sizeof *t->slot);
   uint32_t *idx = malloc(m * (size_t)(j->k + 1) * sizeof *idx);
-  if (!t->slot || !idx) { free(idx); return -1; }
+  mgs_status st = MGS_OK;
+  if (!t->slot || !idx) { st = mgs_error_set(err, MGS_ERR_NOMEM, "sugar: out of memory for %zu samples", m); goto done; }
   memset(t->slot, 0xff, n * sizeof *t->slot);
   size_t u = 0;
   for (size_t i = 0; i < m; i++) {
     const uint32_t *nb = j->knn + (size_t)j->s[i].gauss * (size_t)j->k;
     for (int r = 0; r <= j->k; r++) {
       uint32_t gi = r < j->k ? nb[r] : j->s[i].gauss;
+      if (gi >= n) {
+        st = mgs_error_set(err, MGS_ERR_ARG, "sugar: sample %zu's neighbour list names Gaussian %u of %zu", i, gi, n);
+        goto done;
+      }
       if (t->slot[gi] == UINT32_MAX) { t->slot[gi] = (uint32_t)u; idx[u++] = gi; }
     }
   }
-  t->loc = malloc((u ? u : 1) * sizeof *t->loc);
-  if (!t->loc) { free(idx); return -1; }
+  if (!(t->loc = malloc((u ? u : 1) * sizeof *t->loc))) {
+    st = mgs_error_set(err, MGS_ERR_NOMEM, "sugar: out of memory for %zu samples", m);
+    goto done;
+  }
   locals_job lj = {j->g, idx, t->loc};
   mgs_parallel_for(0, u, 256, locals_range, &lj);
+done:
   free(idx);
-  return 0;
+  if (st) { free(t->slot); t->slot = NULL; }
+  return st;
 }
 
 /* Runs fn over the samples, sums the values, scatters the rows (the last row of a sample
@@ -148,15 +159,12 @@ static mgs_status run(loss_job *j, size_t m, mgs_range_fn fn, mgs_gaussians *gra
   for (size_t i = 0; i < m; i++)
     if (j->s[i].gauss >= j->g->n) return mgs_error_set(err, MGS_ERR_ARG, "sugar: sample %zu names Gaussian %u of %zu", i, j->s[i].gauss, j->g->n);
   if (grad && grad->n != j->g->n) return mgs_error_set(err, MGS_ERR_ARG, "sugar: gradient model holds %zu Gaussians, model %zu", grad->n, j->g->n);
-  for (size_t i = 0; i < m; i++) /* neighbour lists name Gaussians of this model */
-    for (int r = 0; r < j->k; r++)
-      if (j->knn[(size_t)j->s[i].gauss * (size_t)j->k + (size_t)r] >= j->g->n)
-        return mgs_error_set(err, MGS_ERR_ARG, "sugar: sample %zu's neighbour list names Gaussian %u of %zu", i,
-                             j->knn[(size_t)j->s[i].gauss * (size_t)j->k + (size_t)r], j->g->n);
-  mgs_sugar_locals lt = {NULL, NULL};
+  mgs_sugar_locals lt;
+  mgs_status st = locals_build(j, m, &lt, err);
+  if (st) return st;
   j->values = malloc(m * sizeof *j->values);
   j->rows = grad ? malloc(m * (size_t)j->rows_per * MGS_SUGAR_ROW * sizeof *j->rows) : NULL;
-  if (!j->values || (grad && !j->rows) || locals_build(j, m, &lt)) {
+  if (!j->values || (grad && !j->rows)) {
     free(j->values);
     free(j->rows);
     free(lt.loc);

@@ -1,5 +1,5 @@
-/* The 3DGS .ply layout (SPEC §4): read any encoding / property order, write the
- * reference's binary little-endian layout. f_rest is channel-major in the file
+/* The 3DGS .ply layout (SPEC §4): read any encoding / property order (and SuperSplat's
+ * compressed layout, core/ply_compressed.h), write the reference's binary little-endian layout. f_rest is channel-major in the file
  * (f_rest_{c*R+k}) and [i][k][c] in memory. */
 #include <math.h>
 #include <stdio.h>
@@ -9,6 +9,7 @@
 #include "core/mgs_fs.h"
 #include "core/mgs_origin.h"
 #include "core/mgs_ply.h"
+#include "core/ply_compressed.h"
 #include "core/ply_format.h"
 
 enum { G_X, G_Y, G_Z, G_DC0, G_DC1, G_DC2, G_OPACITY, G_S0, G_S1, G_S2, G_R0, G_R1, G_R2, G_R3, G_FIXED };
@@ -81,6 +82,28 @@ static void choose_origin(const double *xyz, size_t n, double origin[3]) {
   mgs_origin_choose(c, n ? sqrt(ss / (double)n) : 1.0, origin);
 }
 
+/* The means into the local frame, in double before they become float; takes g and xyz64. */
+static mgs_status place_means(const char *path, mgs_gaussians *g, double *xyz64, const double *origin, mgs_gaussians **out,
+                              mgs_error *err) {
+  if (origin) for (int k = 0; k < 3; k++) g->origin[k] = origin[k];
+  else choose_origin(xyz64, g->n, g->origin);
+  for (size_t i = 0; i < g->n; i++)
+    for (int k = 0; k < 3; k++) {
+      float f = (float)(xyz64[3 * i + (size_t)k] - g->origin[k]);
+      if (!isfinite(f)) {
+        mgs_status st = mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite in float (%g)", path,
+                                      i, fixed_names[G_X + k], xyz64[3 * i + (size_t)k]);
+        free(xyz64);
+        mgs_gaussians_destroy(g);
+        return st;
+      }
+      g->mean[3 * i + (size_t)k] = f;
+    }
+  free(xyz64);
+  *out = g;
+  return MGS_OK;
+}
+
 mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_error *err) {
   static const double zero[3] = {0, 0, 0};
   return mgs_ply_read_gaussians_local(path, zero, out, err);
@@ -95,6 +118,13 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
   for (int i = 0; i < pf.n_elems; i++)
     if (strcmp(pf.elems[i].name, "vertex") == 0) { vi = i; break; }
   if (vi < 0) { ply_close(&pf); return mgs_error_set(err, MGS_ERR_FORMAT, "%s: no 'vertex' element", path); }
+  if (ply_is_compressed_gaussians(&pf)) { /* SuperSplat / splat-transform's *.compressed.ply */
+    mgs_gaussians *g = NULL;
+    double *xyz64 = NULL;
+    st = ply_read_compressed_gaussians(&pf, &g, &xyz64, err);
+    ply_close(&pf);
+    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
+  }
   const ply_element *el = &pf.elems[vi];
   gread r;
   memset(&r, 0, sizeof r);
@@ -164,25 +194,8 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
     free(r.xyz64);
     return st;
   }
-  /* the means into the local frame, in double before they become float */
-  mgs_gaussians *g = r.g;
-  g->kind = surfel ? MGS_MODEL_2DGS : MGS_MODEL_3DGS;
-  if (origin) for (int k = 0; k < 3; k++) g->origin[k] = origin[k];
-  else choose_origin(r.xyz64, g->n, g->origin);
-  for (size_t i = 0; i < g->n; i++)
-    for (int k = 0; k < 3; k++) {
-      float f = (float)(r.xyz64[3 * i + (size_t)k] - g->origin[k]);
-      if (!isfinite(f)) {
-        free(r.xyz64);
-        mgs_gaussians_destroy(g);
-        return mgs_error_set(err, MGS_ERR_NUMERIC, "%s: vertex %zu: property '%s' is not finite in float (%g)", path, i,
-                             fixed_names[G_X + k], r.xyz64[3 * i + (size_t)k]);
-      }
-      g->mean[3 * i + (size_t)k] = f;
-    }
-  free(r.xyz64);
-  *out = g;
-  return MGS_OK;
+  r.g->kind = surfel ? MGS_MODEL_2DGS : MGS_MODEL_3DGS;
+  return place_means(path, r.g, r.xyz64, origin, out, err);
 }
 
 /* ---- writing ---- */

@@ -7,7 +7,9 @@
  * NaN/Inf value is MGS_ERR_NUMERIC naming the vertex index and property). Element counts
  * are checked against the file size before anything is allocated. Also reads plain point
  * clouds (x y z [red green blue] as uchar, ushort or float) for initial points and writes
- * them in the reference's storePly layout (x y z nx ny nz red green blue). */
+ * them in the reference's storePly layout (x y z nx ny nz red green blue). The Gaussian
+ * readers also take SuperSplat's *.compressed.ply (core/ply_compressed.h) and, by its name,
+ * the web viewers' *.splat (core/splat_format.h). */
 #ifndef MGS_PLY_H
 #define MGS_PLY_H
 #include <stddef.h>

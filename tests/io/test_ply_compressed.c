@@ -1,9 +1,12 @@
-/* SuperSplat / splat-transform's compressed .ply (core/ply_compressed.h) read as a 3DGS
- * model: against splat-transform's own decompression of the same file (an independent
+/* SuperSplat / splat-transform's compressed .ply (core/ply_compressed.h) and the web
+ * viewers' .splat (core/splat_format.h) read as 3DGS models. The compressed file: against splat-transform's own decompression of the same file (an independent
  * reader: lever600.splat-transform.ply is `splat-transform lever600.compressed.ply
  * lever600.splat-transform.ply`, splat-transform 2.7.1 from npm, of 600 Gaussians of a
  * trained 200² model of gmsh-doc's lever, SH degree 3); hand-packed values at the ends of
- * every range (opacity 0 and 255 stay finite); malformed layouts refused naming the file. */
+ * every range (opacity 0 and 255 stay finite); malformed layouts refused naming the file.
+ * The .splat: lever600.splat is lever600.splat-transform.ply written as antimatter15's
+ * convert script writes (linear scales; colour, opacity and rotation bytes truncated), read
+ * back within those quanta; bad sizes and scales refused naming the file. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -179,10 +182,72 @@ static void test_refused(void) {
   CHECK_MSG(strstr(err.msg, "short.ply") != NULL, "short: '%s'", err.msg);
 }
 
+static double sigmoid(double x) { return 1.0 / (1.0 + exp(-x)); }
+
+static void test_splat(void) {
+  const char *src = getenv("MGS_SOURCE_DIR");
+  CHECK(src != NULL);
+  if (!src) return;
+  char a[4096], b[4096];
+  snprintf(a, sizeof a, "%s/tests/io/data/lever600.splat", src);
+  snprintf(b, sizeof b, "%s/tests/io/data/lever600.splat-transform.ply", src);
+  mgs_gaussians *g = NULL, *ref = NULL;
+  mgs_error err = {0};
+  CHECK_OK(mgs_ply_read_gaussians(a, &g, &err), &err);
+  CHECK_OK(mgs_ply_read_gaussians(b, &ref, &err), &err);
+  if (!g || !ref) goto done;
+  CHECK(g->n == 600 && g->sh_degree == 0 && g->kind == MGS_MODEL_3DGS);
+  const double C0 = 0.28209479177387814;
+  double worst[5] = {0};
+  size_t compared = 0;
+  for (size_t i = 0; i < g->n && i < ref->n; i++) {
+    double qn = 0, dot = 0;
+    for (int k = 0; k < 4; k++) qn += (double)ref->rot[4 * i + k] * ref->rot[4 * i + k];
+    for (int k = 0; k < 4; k++) dot += g->rot[4 * i + k] * ref->rot[4 * i + k] / sqrt(qn);
+    worst[3] = fmax(worst[3], 1 - fabs(dot));
+    for (int k = 0; k < 3; k++) {
+      worst[0] = fmax(worst[0], fabs(g->mean[3 * i + k] - ref->mean[3 * i + k]));
+      worst[1] = fmax(worst[1], fabs(g->log_scale[3 * i + k] - ref->log_scale[3 * i + k]));
+      const double c = 0.5 + C0 * ref->sh_dc[3 * i + k];
+      if (c > 0 && c < 1) worst[2] = fmax(worst[2], fabs(g->sh_dc[3 * i + k] - ref->sh_dc[3 * i + k]) * C0); /* in colour */
+    }
+    const double al = sigmoid(ref->opacity[i]);
+    if (al > 1.0 / 255 && al < 254.0 / 255) worst[4] = fmax(worst[4], fabs(sigmoid(g->opacity[i]) - al)), compared++;
+  }
+  CHECK_MSG(worst[0] == 0, "positions are float32 in the file: %g", worst[0]);
+  CHECK_MSG(worst[1] <= 1e-6, "log scales: %g", worst[1]);
+  CHECK_MSG(worst[2] <= 1.0 / 255 + 1e-6, "colour: %g (one byte: %g)", worst[2], 1.0 / 255);
+  CHECK_MSG(worst[3] <= 5e-4, "rotation: 1 - |cos| = %g", worst[3]);
+  CHECK_MSG(worst[4] <= 1.0 / 255 + 1e-6, "opacity: %g", worst[4]);
+  CHECK(compared > 300);
+done:
+  mgs_gaussians_destroy(g);
+  mgs_gaussians_destroy(ref);
+  /* refused: not a multiple of 32 bytes, empty, a zero scale */
+  unsigned char rec[64] = {0};
+  float one = 1.0f;
+  for (int k = 0; k < 3; k++) memcpy(rec + 12 + 4 * k, &one, 4);
+  rec[28] = 255;
+  FILE *f = fopen(tmp_path("odd.splat"), "wb");
+  fwrite(rec, 1, 33, f);
+  fclose(f);
+  expect_refused("odd.splat", "multiple of 32");
+  f = fopen(tmp_path("empty.splat"), "wb");
+  fclose(f);
+  expect_refused("empty.splat", "multiple of 32");
+  memcpy(rec + 32, rec, 32);
+  memset(rec + 32 + 16, 0, 4); /* splat 1, scale 1 = 0 */
+  f = fopen(tmp_path("flat.splat"), "wb");
+  fwrite(rec, 1, 64, f);
+  fclose(f);
+  expect_refused("flat.splat", "splat 1: scale 1");
+}
+
 int main(void) {
   dir = mgs_test_tmpdir("io_ply_compressed");
   RUN(test_against_splat_transform);
   RUN(test_hand_packed);
   RUN(test_refused);
+  RUN(test_splat);
   return mgs_test_finish();
 }

@@ -25,18 +25,25 @@ static const char *tmp_path(const char *name) {
   return path_buf;
 }
 
-static void test_against_splat_transform(void) {
+/* Reads tests/io/data/NAME and the 3DGS file it is checked against (splat-transform's
+ * decompression of the compressed file, which the .splat was also written from). */
+static int read_with_reference(const char *name, mgs_gaussians **g, mgs_gaussians **ref) {
+  *g = *ref = NULL;
   const char *src = getenv("MGS_SOURCE_DIR");
   CHECK(src != NULL);
-  if (!src) return;
+  if (!src) return 0;
   char a[4096], b[4096];
-  snprintf(a, sizeof a, "%s/tests/io/data/lever600.compressed.ply", src);
+  snprintf(a, sizeof a, "%s/tests/io/data/%s", src, name);
   snprintf(b, sizeof b, "%s/tests/io/data/lever600.splat-transform.ply", src);
-  mgs_gaussians *g = NULL, *ref = NULL;
   mgs_error err = {0};
-  CHECK_OK(mgs_ply_read_gaussians(a, &g, &err), &err);
-  CHECK_OK(mgs_ply_read_gaussians(b, &ref, &err), &err);
-  if (!g || !ref) goto done;
+  CHECK_OK(mgs_ply_read_gaussians(a, g, &err), &err);
+  CHECK_OK(mgs_ply_read_gaussians(b, ref, &err), &err);
+  return *g && *ref;
+}
+
+static void test_against_splat_transform(void) {
+  mgs_gaussians *g = NULL, *ref = NULL;
+  if (!read_with_reference("lever600.compressed.ply", &g, &ref)) goto done;
   CHECK(g->n == 600 && ref->n == 600);
   CHECK(g->sh_degree == 3 && ref->sh_degree == 3);
   CHECK(g->kind == MGS_MODEL_3DGS);
@@ -185,17 +192,8 @@ static void test_refused(void) {
 static double sigmoid(double x) { return 1.0 / (1.0 + exp(-x)); }
 
 static void test_splat(void) {
-  const char *src = getenv("MGS_SOURCE_DIR");
-  CHECK(src != NULL);
-  if (!src) return;
-  char a[4096], b[4096];
-  snprintf(a, sizeof a, "%s/tests/io/data/lever600.splat", src);
-  snprintf(b, sizeof b, "%s/tests/io/data/lever600.splat-transform.ply", src);
   mgs_gaussians *g = NULL, *ref = NULL;
-  mgs_error err = {0};
-  CHECK_OK(mgs_ply_read_gaussians(a, &g, &err), &err);
-  CHECK_OK(mgs_ply_read_gaussians(b, &ref, &err), &err);
-  if (!g || !ref) goto done;
+  if (!read_with_reference("lever600.splat", &g, &ref)) goto done;
   CHECK(g->n == 600 && g->sh_degree == 0 && g->kind == MGS_MODEL_3DGS);
   const double C0 = 0.28209479177387814;
   double worst[5] = {0};

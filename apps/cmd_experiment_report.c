@@ -69,7 +69,7 @@ typedef struct exp_cell {
   mgs_stats_interval iv;
   mgs_stats_verdict verdict, verdict_holm;
   double p_holm, holm_level, holm_lo, holm_hi;
-  int unpaired;                  /* seeds with a run on one side only */
+  int only_base, only_variant;   /* seeds with a run on one side only: the base's, the variant's */
   mgs_stats_front_tally tally;   /* H3 */
   size_t front_n;                /* H3: points on the base's front */
   double base_mean, base_sd;     /* the base's measure over seeds (reference) */
@@ -188,7 +188,8 @@ static mgs_status compute_cell(const exp_report_in *in, const char *ds, const ch
       if (r) { vpts[n].count = metric(r, M_GAUSSIANS); vpts[n].psnr = final_pt(r)->psnr; n++; }
       continue;
     }
-    if (!b != !r) c->unpaired++;
+    if (b && !r) c->only_base++;
+    if (r && !b) c->only_variant++;
     if (!b || !r) continue;
     ch[n++] = mgs_stats_change(metric(r, h->what) + h->offset, mb + h->offset, h->scale);
   }
@@ -218,7 +219,8 @@ static mgs_status compute_cell(const exp_report_in *in, const char *ds, const ch
     if (n == 0) NOTE("no paired measurement");
     else if (c->iv.skipped) NOTE("%d of %d seeds without a measurement%s", c->iv.skipped, n,
                                  h->scale == MGS_STATS_LOG_RATIO ? " (or 0)" : "");
-    if (c->unpaired) NOTE("%s%d seeds unpaired", l ? "; " : "", c->unpaired);
+    if (c->only_base) NOTE("%s%d of %s's seeds without a run of %s", l ? "; " : "", c->only_base, base, var);
+    if (c->only_variant) NOTE("%s%d seeds without a run of %s", l ? "; " : "", c->only_variant, base);
   }
   if (c->iv.n == 1) NOTE("%s1 seed: no interval", l ? "; " : "");
 #undef NOTE

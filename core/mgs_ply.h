@@ -9,7 +9,8 @@
  * clouds (x y z [red green blue] as uchar, ushort or float) for initial points and writes
  * them in the reference's storePly layout (x y z nx ny nz red green blue). The Gaussian
  * readers also take SuperSplat's *.compressed.ply (core/ply_compressed.h) and, by its name,
- * the web viewers' *.splat (core/splat_format.h) and Niantic's *.spz (core/spz_format.h). */
+ * the web viewers' *.splat (core/splat_format.h), Niantic's *.spz (core/spz_format.h) and
+ * PlayCanvas's *.sog or its meta.json (core/sog_format.h). */
 #ifndef MGS_PLY_H
 #define MGS_PLY_H
 #include <stddef.h>

@@ -12,6 +12,7 @@
 #include "core/ply_compressed.h"
 #include "core/ply_format.h"
 #include "core/splat_format.h"
+#include "core/sog_format.h"
 #include "core/spz_format.h"
 
 enum { G_X, G_Y, G_Z, G_DC0, G_DC1, G_DC2, G_OPACITY, G_S0, G_S1, G_S2, G_R0, G_R1, G_R2, G_R3, G_FIXED };
@@ -117,6 +118,12 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
     mgs_gaussians *g = NULL;
     double *xyz64 = NULL;
     mgs_status st = splat_read_gaussians(path, &g, &xyz64, err);
+    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
+  }
+  if (sog_is_path(path)) { /* PlayCanvas's SOG: a .sog bundle or its meta.json (core/sog_format.h) */
+    mgs_gaussians *g = NULL;
+    double *xyz64 = NULL;
+    mgs_status st = sog_read_gaussians(path, &g, &xyz64, err);
     return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
   }
   if (spz_is_path(path)) { /* Niantic's .spz (core/spz_format.h) */

@@ -6,7 +6,7 @@ PKGS=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libopenvdb-tools python3-openvdb
   libopenimageio-dev openimageio-tools libembree-dev libtbb-dev
-  libassimp-dev libcjson-dev libcairo2-dev libqhull-dev zlib1g-dev libzstd-dev
+  libassimp-dev libcjson-dev libcairo2-dev libqhull-dev zlib1g-dev libzstd-dev libminizip-dev libwebp-dev
   libgudhi-dev python3-gudhi libphat-dev python3-phat python3-numpy
   python3-dev python3-venv python3-setuptools python3-wheel
   libopencv-core-dev python3-pot python3-pil

@@ -16,6 +16,8 @@ Targets (quoted from the issues; a row says whether it holds, the last line coun
       of 5, and less training time (CPU seconds here: the runs share the machine).
   24: SuGaR's mesh Chamfer below the baseline's alpha-surface on >= 4 of 5; GaussianPro's
       test PSNR and count beside the baseline's.
+Then issue 27's pairs, first readings (no interval: `morsegs experiment --report-from` has
+those): each MorseGS form and Topology-GS beside the method it sits on, per scene.
 """
 import glob
 import json
@@ -155,6 +157,25 @@ def main():
             ng, f(None if qg is None else qg - q3, "%+.2f dB"), f(None if gg is None else gg / g3, "%.2f"),
             f(None if tg is None else tg / t3, "%.1f")))
     print("\nSuGaR's mesh below the 3DGS alpha-surface on %d of %d scenes (target >= 4 of 5)" % (cs, tot))
+
+    print("\n## Issue 27: MorseGS on its base method (and Topology-GS on 3DGS), first readings\n")
+    print("Means over the seeds both finished (n); changes of the variant against its base: PSNR in dB, the rest as ratios.\n")
+    print("| scene | variant | on | n | PSNR | Gaussians | alpha Chamfer | fused Chamfer | visible floater mass |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    pairs = [("morse-r", B), ("morse-full", B), ("morse-d", B), ("morse-i", B), ("topology-gs", B),
+             ("2dgs-morse-r", "2dgs"), ("ms-morse-r", "mini-splatting")]
+    def ratio(a, b):
+        return None if a is None or b is None or b == 0 else a / b
+    for ds in scenes:
+        for v, base in pairs:
+            pb, pv, n = paired(runs, ds, base, v, "PSNR")
+            if not n:
+                continue
+            cells = [f(pv - pb, "%+.2f dB")]
+            for key in ("gaussians", "chamfer", "chamfer_fused", "floater_mass"):
+                b_, v_, _ = paired(runs, ds, base, v, key)
+                cells.append(f(ratio(v_, b_), "%.2f"))
+            print("| %s | %s | %s | %d | %s |" % (ds, v, base, n, " | ".join(cells)))
     return 0
 
 

@@ -595,46 +595,66 @@ static double run_cost(const exp_run *r) {
   return r->run_seconds;
 }
 
+/* The mean one-core cost of the finished runs of `variant`, NAN when none has finished. */
+static double variant_cost(const experiment *e, const char *variant) {
+  double sum = 0;
+  int n = 0;
+  for (size_t i = 0; i < e->n_runs; i++)
+    if (!strcmp(e->runs[i].variant, variant) && isfinite(run_cost(&e->runs[i]))) { sum += run_cost(&e->runs[i]); n++; }
+  return n ? sum / n : NAN;
+}
+
+/* One core's seconds plan item i is expected to take: its variant's finished runs, else the
+   baseline's times the variant's cost factor, else the prior from bench figures (px: the
+   datasets' pixels per view). *from (may be NULL) says which. */
+static double item_estimate(const experiment *e, const plan_item *plan, size_t i, const double *px, const char **from) {
+  const variant_sel *vs = &e->vars[plan[i].var];
+  double est = variant_cost(e, vs->def->name);
+  const char *src = "its finished runs";
+  if (!isfinite(est)) {
+    const double base = variant_cost(e, "baseline");
+    if (isfinite(base)) {
+      est = base * exp_variant_cost_factor(vs->def->args);
+      src = "baseline's finished runs × factor";
+    } else {
+      est = exp_run_cost_prior(vs->def->args, e->iters, px[plan[i].ds], plan[i].sweep ? 1 : e->n_evals);
+      src = "prior (bench figures)";
+    }
+  }
+  if (from) *from = src;
+  return est;
+}
+
+static double *datasets_pixels(const experiment *e) {
+  double *px = calloc(e->n_ds ? e->n_ds : 1, sizeof *px);
+  if (px)
+    for (size_t d = 0; d < e->n_ds; d++) px[d] = dataset_pixels(&e->ds[d]);
+  return px;
+}
+
 /* Prints the plan and its estimated time; nothing is trained or written. */
 static void print_plan(const experiment *e, const plan_item *plan, size_t np, const unsigned char *done) {
-  double base_mean = NAN;
-  {
-    double sum = 0;
-    int n = 0;
-    for (size_t i = 0; i < e->n_runs; i++)
-      if (!strcmp(e->runs[i].variant, "baseline") && isfinite(run_cost(&e->runs[i]))) { sum += run_cost(&e->runs[i]); n++; }
-    if (n) base_mean = sum / n;
-  }
-  double *px = calloc(e->n_ds ? e->n_ds : 1, sizeof *px);
-  for (size_t d = 0; d < e->n_ds; d++) px[d] = dataset_pixels(&e->ds[d]);
+  double *px = datasets_pixels(e);
+  if (!px) return;
   printf("plan for %s: %zu runs, %d iterations each, %d evaluation points\n", e->dir, np, e->iters, e->n_evals);
   printf("| variant | runs | finished | to run | estimated s per run (one core) | from |\n|---|---|---|---|---|---|\n");
   double total = 0;
   size_t todo_all = 0;
   for (size_t v = 0; v < e->n_vars; v++) {
-    const variant_sel *vs = &e->vars[v];
     size_t runs = 0, fin = 0, todo = 0;
-    double sum = 0, est_sum = 0;
-    int n = 0;
-    for (size_t i = 0; i < e->n_runs; i++)
-      if (!strcmp(e->runs[i].variant, vs->def->name) && isfinite(run_cost(&e->runs[i]))) { sum += run_cost(&e->runs[i]); n++; }
-    const char *from;
+    double est_sum = 0;
+    const char *from = NULL;
     for (size_t i = 0; i < np; i++) {
       if (plan[i].var != v) continue;
       runs++;
       if (done[i]) { fin++; continue; }
       todo++;
-      double est;
-      int evals = plan[i].sweep ? 1 : e->n_evals;
-      if (n) est = sum / n;
-      else if (isfinite(base_mean)) est = base_mean * exp_variant_cost_factor(vs->def->args);
-      else est = exp_run_cost_prior(vs->def->args, e->iters, px[plan[i].ds], evals);
-      est_sum += est;
+      est_sum += item_estimate(e, plan, i, px, &from);
     }
-    from = n ? "its finished runs" : isfinite(base_mean) ? "baseline's finished runs × factor" : "prior (bench figures)";
+    if (!from) from = isfinite(variant_cost(e, e->vars[v].def->name)) ? "its finished runs" : "-";
     total += est_sum;
     todo_all += todo;
-    printf("| %s | %zu | %zu | %zu | %.0f | %s |\n", vs->def->name, runs, fin, todo, todo ? est_sum / (double)todo : 0.0, from);
+    printf("| %s | %zu | %zu | %zu | %.0f | %s |\n", e->vars[v].def->name, runs, fin, todo, todo ? est_sum / (double)todo : 0.0, from);
   }
   char a[32], b[32];
   fmt_duration(total, a, sizeof a);
@@ -996,6 +1016,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
      dataset before the others, then the sweeps */
   size_t cap = e.n_ds * e.n_vars * ((size_t)e.seeds + (size_t)16 * (size_t)e.sweep_seeds) + 1;
   plan_item *plan = calloc(cap, sizeof *plan);
+  double *px = NULL; /* the datasets' pixels per view, for the ETA's estimates */
   size_t np = 0;
   for (int s = 0; s < e.seeds; s++)
     for (int pass = 1; pass >= 0; pass--)
@@ -1052,8 +1073,8 @@ int mgs_cmd_experiment(int argc, char **argv) {
   for (int k = 0; k < e.n_evals; k++) printf(" %d", e.evals[k]);
   printf("\n");
   if (write_report(&e, &err)) { mgs_cli_fail("experiment", &err); goto fail_plan; }
-  double spent = 0;
-  size_t ran = 0, idx = 0, todo = np - kept, next = 0;
+  px = datasets_pixels(&e);
+  size_t idx = 0, todo = np - kept, next = 0;
   int interrupted = 0, n_running = 0, forwarded = 0;
   job *running = calloc((size_t)e.jobs, sizeof *running);
   if (!running) { fprintf(stderr, "morsegs experiment: out of memory\n"); goto fail_plan; }
@@ -1073,8 +1094,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
         printf("[%zu/%zu] %s: skipped (not available)\n", idx, todo, label);
         continue;
       }
+      /* the plan's estimate (finished runs' CPU costs) of this run and those not started, over the jobs:
+         the wall time of runs finished here says little when they were resumed from an earlier session */
+      double left = 0;
+      for (size_t q = i; q < np; q++)
+        if (!done[q]) left += item_estimate(&e, plan, q, px, NULL);
       char eta[32];
-      fmt_duration(ran ? spent / (double)ran * (double)(todo - idx + 1) / (double)e.jobs : NAN, eta, sizeof eta);
+      fmt_duration(px ? left / (double)e.jobs : NAN, eta, sizeof eta);
       printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
              todo - idx + 1, eta);
       fflush(stdout);
@@ -1113,7 +1139,6 @@ int mgs_cmd_experiment(int argc, char **argv) {
       free(rp);
     }
     if (res == 0) {
-      spent += dt; ran++;
       snprintf(vs->status.status, sizeof vs->status.status, "available");
       const exp_point *p = &r->pt[r->n_points - 1];
       printf("[%zu/%zu] %s: done in %.1f s (train %.1f s): PSNR %.3f dB, %.0f Gaussians, Chamfer %.6g\n", jb.idx, todo, jb.label,
@@ -1159,6 +1184,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     rc = e.failures ? 1 : 0;
   }
 fail_plan:
+  free(px);
   free(done);
   free(plan);
 fail:

@@ -20,6 +20,11 @@
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs eval RUN [options]\n"
+    "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [options]\n"
+    "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's .ply, 2DGS, SuperSplat's\n"
+    "  .compressed.ply, .splat, .spz, .sog or a SOG meta.json), first made the run folder RUN\n"
+    "  (point_cloud/iteration_0, the dataset's cameras.json, cfg_args; RUN must not exist or be empty),\n"
+    "  then evaluated as one; --background: the dataset's default (white for NeRF-synthetic) unless given\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --split S          test (default), val or train\n"
     "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply): the\n"
@@ -57,13 +62,15 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"trunc", required_argument, 0, 'T'}, {"min-weight", required_argument, 0, 'W'},
                                        {"trunc-back", required_argument, 0, 'B'}, {"trunc-thin", required_argument, 0, 'N'},
                                        {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
-                                       {0, 0, 0, 0}};
-  const char *split_s = "test", *mesh = NULL;
+                                       {"data", required_argument, 0, 'D'}, {"output", required_argument, 0, 'o'},
+                                       {"background", required_argument, 0, 'G'}, {0, 0, 0, 0}};
+  const char *split_s = "test", *mesh = NULL, *data = NULL, *out = NULL;
+  int white = -1;
   int iteration = -1, images = 1, max_views = 0, c, fused_only = 0;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
   optind = 1;
-  while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+  while ((c = getopt_long(argc, argv, "ho:", opts, NULL)) != -1) {
     switch (c) {
       case 'i': case 'v': {
         char *end;
@@ -76,6 +83,13 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'm': mesh = optarg; break;
       case 'n': images = 0; break;
       case 'F': fused_only = 1; break;
+      case 'D': data = optarg; break;
+      case 'o': out = optarg; break;
+      case 'G':
+        if (!strcmp(optarg, "white")) white = 1;
+        else if (!strcmp(optarg, "black")) white = 0;
+        else { fprintf(stderr, "morsegs eval: --background '%s': expected white or black\n", optarg); return 2; }
+        break;
       case 'C': fo.carve = 1; break;
       case 'Z':
         if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
@@ -94,7 +108,17 @@ int mgs_cmd_eval(int argc, char **argv) {
       default: usage(stderr); return 2;
     }
   }
-  if (optind != argc - 1) { fprintf(stderr, "morsegs eval: exactly one RUN folder is expected\n"); usage(stderr); return 2; }
+  if (optind != argc - 1) { fprintf(stderr, "morsegs eval: exactly one RUN folder (or MODEL with --data) is expected\n"); usage(stderr); return 2; }
+  if (!data != !out || (white >= 0 && !data)) {
+    fprintf(stderr, "morsegs eval: --data DATASET and -o RUN go together (a model trained elsewhere); --background needs them\n");
+    return 2;
+  }
+  if (data) { /* a model trained elsewhere: made a run folder first */
+    mgs_error ierr;
+    mgs_error_clear(&ierr);
+    if (mgs_run_import(argv[optind], data, white, out, &ierr) != MGS_OK) { mgs_cli_fail("eval", &ierr); return 1; }
+    argv[optind] = (char *)out;
+  }
   int split = -1;
   for (int s = 0; s < MGS_SPLIT_COUNT; s++)
     if (!strcmp(split_s, mgs_split_name((mgs_split)s))) split = s;

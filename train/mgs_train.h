@@ -333,6 +333,16 @@ void mgs_run_lock_release(mgs_run_lock *l); /* NULL is fine */
 mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds,
                         mgs_gaussians **g, int *iteration_out, mgs_error *err);
 
+/* A run folder for a model trained elsewhere, so that eval/render/vdb treat it as one of
+ * ours: `model_path` (any format mgs_ply_read_gaussians reads: the reference .ply, 2DGS,
+ * SuperSplat's compressed .ply, .splat, .spz, SOG) becomes out_dir/point_cloud/iteration_0/
+ * point_cloud.ply, with the dataset's cameras.json and a cfg_args naming the dataset (its
+ * absolute path), the background (white_background: 1 white, 0 black, -1 the dataset's
+ * default), the scene origin and `imported_from`. The model must be in the dataset's world
+ * frame. out_dir must not exist or be empty (nothing is overwritten). */
+mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, const char *out_dir,
+                          mgs_error *err);
+
 /* The settings record RUN/cfg_args: Python Namespace(...) syntax as the reference (so
  * its viewers find source_path), one key=value per setting. */
 typedef struct mgs_settings {

@@ -243,6 +243,61 @@ void mgs_run_record_origin(mgs_settings *s, const mgs_dataset *ds) {
   mgs_settings_set(s, "scene_origin", b, 1);
 }
 
+/* ---- a model trained elsewhere ------------------------------------------------------- */
+
+mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, const char *out_dir,
+                          mgs_error *err) {
+  if (mgs_path_exists(out_dir)) {
+    int empty = 0;
+    DIR *d = mgs_is_dir(out_dir) ? opendir(out_dir) : NULL;
+    if (d) {
+      struct dirent *e;
+      empty = 1;
+      while ((e = readdir(d))) if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) empty = 0;
+      closedir(d);
+    }
+    if (!empty) return mgs_error_set(err, MGS_ERR_IO, "%s exists and is not an empty folder; nothing is written into it", out_dir);
+  }
+  mgs_dataset_options o;
+  mgs_dataset_options_default(&o);
+  o.load_images = 0;
+  o.white_background = white_background;
+  mgs_dataset *ds = NULL;
+  mgs_gaussians *g = NULL;
+  mgs_status st = mgs_dataset_load(dataset_dir, &o, &ds, err);
+  /* the model's world coordinates into the dataset's local frame, as mgs_run_open does */
+  if (st == MGS_OK) st = mgs_ply_read_gaussians_local(model_path, ds->origin, &g, err);
+  char *src = st == MGS_OK ? realpath(dataset_dir, NULL) : NULL, *from = st == MGS_OK ? realpath(model_path, NULL) : NULL;
+  if (st == MGS_OK && (!src || !from)) st = mgs_error_set(err, MGS_ERR_IO, "%s: cannot resolve the dataset's or the model's path", out_dir);
+  if (st == MGS_OK) st = mgs_mkdir_p(out_dir, err);
+  if (st == MGS_OK) st = mgs_run_write_ply(out_dir, 0, g, err);
+  if (st == MGS_OK) st = mgs_run_write_cameras(out_dir, ds, err);
+  if (st == MGS_OK) {
+    mgs_settings s;
+    mgs_settings_init(&s);
+    mgs_settings_set(&s, "source_path", src, 1);
+    mgs_settings_set(&s, "model_path", out_dir, 1);
+    mgs_settings_set(&s, "imported_from", from, 1);
+    mgs_settings_set(&s, "white_background", ds->background[0] > 0.5f ? "True" : "False", 0);
+    mgs_settings_set(&s, "background", ds->background[0] > 0.5f ? "white" : "black", 1);
+    mgs_settings_seti(&s, "downscale", o.downscale);
+    mgs_settings_seti(&s, "max_width", o.max_width);
+    mgs_settings_seti(&s, "test_every", o.test_every);
+    mgs_settings_seti(&s, "sh_degree", g->sh_degree);
+    mgs_settings_set(&s, "model", mgs_model_kind_name(g->kind), 1);
+    mgs_run_record_origin(&s, ds);
+    char *cfg = mgs_path_join(out_dir, "cfg_args");
+    st = cfg ? mgs_settings_write(cfg, &s, err) : mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+    free(cfg);
+    mgs_settings_free(&s);
+  }
+  free(src);
+  free(from);
+  mgs_gaussians_destroy(g);
+  mgs_dataset_destroy(ds);
+  return st;
+}
+
 /* ---- opening a finished run ----------------------------------------------------------- */
 
 mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs_dataset **ds_out,

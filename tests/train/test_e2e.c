@@ -5,6 +5,7 @@
  * cannot reach. Also: run layout, render, refusal to overwrite, the dataset untouched,
  * resume, and refused MorseGS flags. */
 #include <dirent.h>
+#include <math.h>
 #include <stdarg.h>
 #include <sys/wait.h>
 #include <cjson/cJSON.h>
@@ -70,6 +71,24 @@ int main(void) {
   fprintf(stderr, "test PSNR: trained %.2f dB, frozen %.2f dB, threshold %.1f\n", psnr, psnr_frozen, PSNR_THRESHOLD);
   CHECK(psnr > PSNR_THRESHOLD);
   CHECK(psnr_frozen > 0 && psnr_frozen < PSNR_THRESHOLD); /* the threshold can fail */
+
+  /* a model trained elsewhere (here: this run's .ply) made a run folder by eval --data: the
+     same figures as the run's own eval; never into a folder that holds something */
+  char imported[4400];
+  snprintf(imported, sizeof imported, "%s/imported", tmp);
+  snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
+  CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
+  CHECK_NEAR(results_psnr(imported, 0), psnr, 1e-9);
+  CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images 2>/dev/null", cli, path, data, imported) == 1);
+  CHECK(mgs_test_sh("%s eval %s --data %s --no-images 2>/dev/null", cli, path, data) == 2); /* -o missing */
+  CHECK(mgs_test_sh("%s eval %s/nothing.spz --data %s -o %s/imp2 2>/dev/null", cli, tmp, data, tmp) == 1);
+  snprintf(path, sizeof path, "%s/imp2/cfg_args", tmp);
+  CHECK(!mgs_path_exists(path));
+  /* with the dataset's default background (white for NeRF-synthetic) the figures differ */
+  snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
+  snprintf(imported, sizeof imported, "%s/imported_white", tmp);
+  CHECK(mgs_test_sh("%s eval %s --data %s -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
+  CHECK(fabs(results_psnr(imported, 0) - psnr) > 0.01);
 
   /* run layout of the reference */
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);

@@ -15,11 +15,14 @@
 # by its spawning knob --gap-max, each ×{0.25,0.5,2,4}; mini-splatting by its simplification
 # fraction (--simplify-fraction 0.5 × {0.25,0.5,1.5,2}: 0.125 … 1, the flag's range).
 # Resumable: finished runs are kept and a run cut off continues from its checkpoint (a
-# session's processes end when it stops). Cost (2-core machine): a 7500-iteration 200² 3DGS
-# run is ~5 CPU-minutes plus ~1.5 for its EVALS (2) evaluation points, 2DGS ~3× the
-# training, so the default plan (5 scenes × (9 variants × 5 seeds + 3 × 3 seeds) + 3 × 4 × 5
-# scenes × 3 sweep seeds = 450 runs) is about 55 CPU-hours (PLAN=1 prints the estimate):
-# run it where there are cores, or over several sessions. Runs go seed by seed; in each seed
+# session's processes end when it stops). Cost (2-core machine, measured on the finished runs
+# of 2026-11-27, one core each, two or four runs sharing the machine): a 7500-iteration 200²
+# 3DGS run takes ~1,100 CPU-seconds with its EVALS (2) evaluation points, 2DGS ~1,700,
+# Mini-Splatting ~1,200, SuGaR and GaussianPro ~1,400; the default plan (5 scenes × (9
+# variants × 5 seeds + 3 × 3 seeds) + 3 × 4 × 5 scenes × 3 sweep seeds = 450 runs) is far
+# beyond a 2-core machine's day, and even 3 seeds without sweeps (180 runs) is ~61 core-hours.
+# PLAN=1 prints the estimate from the finished runs' own CPU times: run it where there are
+# cores, or over many sessions with the variants that matter first (VARIANTS). Runs go seed by seed; in each seed
 # the FIRST variants (the proposal's baselines) on every scene come before the MorseGS
 # variants, so a run stopped early compares the baselines on every scene, then has every
 # scene and variant with its first seeds.

@@ -22,7 +22,7 @@ static void usage(FILE *f) {
     "usage: morsegs eval RUN [options]\n"
     "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [options]\n"
     "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's .ply, 2DGS, SuperSplat's\n"
-    "  .compressed.ply, .splat, .spz, .sog or a SOG meta.json), first made the run folder RUN\n"
+    "  .compressed.ply, .splat, .spz, .sog or a SOG meta.json, .ksplat), first made the run folder RUN\n"
     "  (point_cloud/iteration_0, the dataset's cameras.json, cfg_args; RUN must not exist or be empty),\n"
     "  then evaluated as one; --background: the dataset's default (white for NeRF-synthetic) unless given\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"

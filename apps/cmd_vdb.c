@@ -30,7 +30,7 @@ static void usage(FILE *f) {
           "usage: morsegs vdb SCENE.ply|RUN -o OUT.vdb [options]\n"
           "  -o, --output OUT.vdb     output file (grids 'density' and 'sdf')\n"
           "  SCENE.ply (3DGS or 2DGS .ply; also SuperSplat's .compressed.ply, a .splat, a .spz, a .sog or\n"
-          "  its meta.json): the alpha-field's surface (density, sdf); RUN (a run folder): the surface\n"
+          "  its meta.json, a .ksplat): the alpha-field's surface (density, sdf); RUN (a run folder): the surface\n"
           "  of the rendered depth fused at RUN/cameras.json as sdf (tsdf, tsdf_weight beside it)\n"
           "  plus the alpha-field's as density and sdf_alpha; where the alpha-field's surface agrees better\n"
           "  with the model's renders (parts a few pixels thick) it is sdf and the fused one sdf_fused\n"

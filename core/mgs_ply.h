@@ -10,7 +10,8 @@
  * them in the reference's storePly layout (x y z nx ny nz red green blue). The Gaussian
  * readers also take SuperSplat's *.compressed.ply (core/ply_compressed.h) and, by its name,
  * the web viewers' *.splat (core/splat_format.h), Niantic's *.spz (core/spz_format.h) and
- * PlayCanvas's *.sog or its meta.json (core/sog_format.h). */
+ * PlayCanvas's *.sog or its meta.json (core/sog_format.h) and GaussianSplats3D's *.ksplat
+ * (core/ksplat_format.h). */
 #ifndef MGS_PLY_H
 #define MGS_PLY_H
 #include <stddef.h>

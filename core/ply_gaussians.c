@@ -12,6 +12,7 @@
 #include "core/ply_compressed.h"
 #include "core/ply_format.h"
 #include "core/splat_format.h"
+#include "core/ksplat_format.h"
 #include "core/sog_format.h"
 #include "core/spz_format.h"
 
@@ -118,6 +119,12 @@ mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, 
     mgs_gaussians *g = NULL;
     double *xyz64 = NULL;
     mgs_status st = splat_read_gaussians(path, &g, &xyz64, err);
+    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
+  }
+  if (ksplat_is_path(path)) { /* GaussianSplats3D's .ksplat (core/ksplat_format.h) */
+    mgs_gaussians *g = NULL;
+    double *xyz64 = NULL;
+    mgs_status st = ksplat_read_gaussians(path, &g, &xyz64, err);
     return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
   }
   if (sog_is_path(path)) { /* PlayCanvas's SOG: a .sog bundle or its meta.json (core/sog_format.h) */

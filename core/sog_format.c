@@ -83,6 +83,15 @@ static mgs_status texture(sog_src *s, const cJSON *files, int k, size_t count, u
   }
   if (st) return st;
   int w = 0, h = 0;
+  /* a tiny lossless WebP can claim 16383² texels: never decode far more than the count needs */
+  if (!WebPGetInfo((const uint8_t *)data, n, &w, &h)) {
+    free(data);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: '%s' is not a WebP image libwebp can decode", s->path, name);
+  }
+  if ((uint64_t)w * (uint64_t)h > 4 * (uint64_t)count + 65536) {
+    free(data);
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: '%s' is %dx%d, far more texels than %zu Gaussians need", s->path, name, w, h, count);
+  }
   uint8_t *rgba = WebPDecodeRGBA((const uint8_t *)data, n, &w, &h);
   free(data);
   if (!rgba) return mgs_error_set(err, MGS_ERR_FORMAT, "%s: '%s' is not a WebP image libwebp can decode", s->path, name);
@@ -167,7 +176,7 @@ static mgs_status decode(sog_src *s, const cJSON *meta, mgs_gaussians **g, doubl
   if (!st) st = texture(s, cJSON_GetObjectItemCaseSensitive(sh0, "files"), 0, n, &tc, &w, &h, err);
   if (!st && coeffs) {
     const cJSON *files = cJSON_GetObjectItemCaseSensitive(shn, "files");
-    st = texture(s, files, 0, 1, &tcent, &wcent, &hcent, err);
+    st = texture(s, files, 0, (size_t)palette * (size_t)coeffs, &tcent, &wcent, &hcent, err);
     /* the palette: 64 entries a row, `coeffs` texels each */
     if (!st && (wcent != 64 * coeffs || (size_t)hcent * 64 < (size_t)palette))
       st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: the SH palette texture is %dx%d; %d entries of %d bands need %d texels wide and %d rows",

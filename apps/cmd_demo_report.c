@@ -197,8 +197,10 @@ static double terms_only(const run_figs *f) {
 }
 
 static void what_ran(char *buf, size_t n, const run_figs *f) {
-  const char *topo = mgs_settings_get(&f->cfg, "topo_loss");
-  if (!mgs_settings_get(&f->cfg, "strategy"))
+  const char *topo = mgs_settings_get(&f->cfg, "topo_loss"), *from = mgs_settings_get(&f->cfg, "imported_from");
+  if (from) /* eval MODEL --data: trained elsewhere */
+    snprintf(buf, n, "trained elsewhere: %s model from %s", cfg(f, "model"), from);
+  else if (!mgs_settings_get(&f->cfg, "strategy"))
     snprintf(buf, n, "n/a (no cfg_args)");
   else if (!strcmp(cfg(f, "strategy"), "morse") || topo)
     snprintf(buf, n, "strategy %s (spawn %s, prune %s), init %s, L_topo %s (β %s), normal loss %s, analysis r = %s",

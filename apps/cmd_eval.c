@@ -20,11 +20,12 @@
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs eval RUN [options]\n"
-    "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [options]\n"
+    "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [--downscale N] [options]\n"
     "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's .ply, 2DGS, SuperSplat's\n"
     "  .compressed.ply, .splat, .spz, .sog or a SOG meta.json, .ksplat), first made the run folder RUN\n"
     "  (point_cloud/iteration_0, the dataset's cameras.json, cfg_args; RUN must not exist or be empty),\n"
-    "  then evaluated as one; --background: the dataset's default (white for NeRF-synthetic) unless given\n"
+    "  then evaluated as one; --background: the dataset's default (white for NeRF-synthetic) unless given;\n"
+    "  --downscale N: the images at 1/N size, as the model was trained (the reference's --resolution N)\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --split S          test (default), val or train\n"
     "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply): the\n"
@@ -63,9 +64,10 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"trunc-back", required_argument, 0, 'B'}, {"trunc-thin", required_argument, 0, 'N'},
                                        {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
                                        {"data", required_argument, 0, 'D'}, {"output", required_argument, 0, 'o'},
-                                       {"background", required_argument, 0, 'G'}, {0, 0, 0, 0}};
+                                       {"background", required_argument, 0, 'G'}, {"downscale", required_argument, 0, 'R'},
+                                       {0, 0, 0, 0}};
   const char *split_s = "test", *mesh = NULL, *data = NULL, *out = NULL;
-  int white = -1;
+  int white = -1, downscale = 0;
   int iteration = -1, images = 1, max_views = 0, c, fused_only = 0;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
@@ -85,6 +87,13 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'F': fused_only = 1; break;
       case 'D': data = optarg; break;
       case 'o': out = optarg; break;
+      case 'R': {
+        char *end;
+        long v = strtol(optarg, &end, 10);
+        if (!*optarg || *end || v < 1 || v > 64) { fprintf(stderr, "morsegs eval: --downscale needs an integer 1..64\n"); return 2; }
+        downscale = (int)v;
+        break;
+      }
       case 'G':
         if (!strcmp(optarg, "white")) white = 1;
         else if (!strcmp(optarg, "black")) white = 0;
@@ -109,14 +118,14 @@ int mgs_cmd_eval(int argc, char **argv) {
     }
   }
   if (optind != argc - 1) { fprintf(stderr, "morsegs eval: exactly one RUN folder (or MODEL with --data) is expected\n"); usage(stderr); return 2; }
-  if (!data != !out || (white >= 0 && !data)) {
-    fprintf(stderr, "morsegs eval: --data DATASET and -o RUN go together (a model trained elsewhere); --background needs them\n");
+  if (!data != !out || ((white >= 0 || downscale) && !data)) {
+    fprintf(stderr, "morsegs eval: --data DATASET and -o RUN go together (a model trained elsewhere); --background and --downscale need them\n");
     return 2;
   }
   if (data) { /* a model trained elsewhere: made a run folder first */
     mgs_error ierr;
     mgs_error_clear(&ierr);
-    if (mgs_run_import(argv[optind], data, white, out, &ierr) != MGS_OK) { mgs_cli_fail("eval", &ierr); return 1; }
+    if (mgs_run_import(argv[optind], data, white, downscale ? downscale : 1, out, &ierr) != MGS_OK) { mgs_cli_fail("eval", &ierr); return 1; }
     argv[optind] = (char *)out;
   }
   int split = -1;

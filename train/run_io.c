@@ -245,8 +245,9 @@ void mgs_run_record_origin(mgs_settings *s, const mgs_dataset *ds) {
 
 /* ---- a model trained elsewhere ------------------------------------------------------- */
 
-mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, const char *out_dir,
-                          mgs_error *err) {
+mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, int downscale,
+                          const char *out_dir, mgs_error *err) {
+  if (downscale < 1) return mgs_error_set(err, MGS_ERR_ARG, "%s: downscale %d; it is a factor >= 1", out_dir, downscale);
   if (mgs_path_exists(out_dir)) {
     int empty = 0;
     DIR *d = mgs_is_dir(out_dir) ? opendir(out_dir) : NULL;
@@ -262,6 +263,7 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
   mgs_dataset_options_default(&o);
   o.load_images = 0;
   o.white_background = white_background;
+  o.downscale = downscale;
   mgs_dataset *ds = NULL;
   mgs_gaussians *g = NULL;
   mgs_status st = mgs_dataset_load(dataset_dir, &o, &ds, err);

@@ -89,6 +89,12 @@ int main(void) {
   snprintf(imported, sizeof imported, "%s/imported_white", tmp);
   CHECK(mgs_test_sh("%s eval %s --data %s -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
   CHECK(fabs(results_psnr(imported, 0) - psnr) > 0.01);
+  /* at half size (a model trained at the reference's --resolution 2): recorded, and other figures */
+  snprintf(imported, sizeof imported, "%s/imported_half", tmp);
+  CHECK(mgs_test_sh("%s eval %s --data %s --background black --downscale 2 -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
+  CHECK(mgs_test_sh("grep -q 'downscale=2' %s/cfg_args", imported) == 0);
+  CHECK(results_psnr(imported, 0) > 0 && fabs(results_psnr(imported, 0) - psnr) > 0.01);
+  CHECK(mgs_test_sh("%s eval %s --downscale 2 2>/dev/null", cli, run) == 2); /* only with --data */
 
   /* run layout of the reference */
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);

@@ -31,6 +31,10 @@ typedef struct mgs_strategy_step {
   /* out: groups whose tensors the hook replaced (1 << group); the trainer skips Adam for
    * them this iteration, as torch does for a fresh parameter without a gradient. */
   unsigned replaced_groups;
+  /* out: every Gaussian was replaced by new ones (Mini-Splatting's reinitialisations): the
+   * trainer tells the loss terms (mgs_term_ops.model_replaced), so that none goes on using an
+   * analysis of a model that no longer exists. */
+  int model_replaced;
   /* For strategies that render (Mini-Splatting): the context of this iteration's forward
    * (untouched since it in pre_backward) and the trainer (its train views and images). */
   mgs_raster *raster;

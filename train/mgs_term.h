@@ -61,14 +61,18 @@ typedef struct mgs_term_ops {
      with MGS_TERM_MAPS the image hook reads the geometry maps (mgs_raster_maps), and the
      trainer asks the forward for them ahead (mgs_raster_hint_maps); with MGS_TERM_DEPTH
      it may add a gradient of the rendered depth (s->dl_ddepth), carried by the same
-     backward as the colour's. A function of the iteration only: the trainer calls it
-     before the forward and again after. */
+     backward as the colour's. A function of the iteration (and of model_replaced notices,
+     which come after the terms of their iteration): the trainer calls it before the forward
+     and again after. */
   unsigned (*active)(void *self, int iteration);
   mgs_status (*image_grad)(void *self, mgs_term_step *s, mgs_error *err);
   mgs_status (*model_grad)(void *self, mgs_term_step *s, mgs_error *err);
   mgs_status (*save)(void *self, FILE *f, mgs_error *err);           /* may be NULL */
   mgs_status (*load)(void *self, FILE *f, mgs_error *err);           /* may be NULL */
   void (*destroy)(void *self);
+  /* May be NULL: the strategy replaced every Gaussian by new ones at `iteration` (after this
+     iteration's terms ran); state derived from the old model is to be dropped. */
+  void (*model_replaced)(void *self, int iteration);
 } mgs_term_ops;
 
 enum { MGS_TERM_IMAGE = 1u, MGS_TERM_MODEL = 2u, MGS_TERM_MAPS = 4u, MGS_TERM_DEPTH = 8u };

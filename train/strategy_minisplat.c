@@ -438,6 +438,7 @@ static mgs_status ms_post(void *self, mgs_strategy_step *s, mgs_error *err) {
       if ((st = reinit(m, s, err))) return st;
       mgs_info("mini-splatting: iteration %d: depth reinitialisation, %zu -> %zu Gaussians", it, n0, g->n);
       s->replaced_groups = all;
+      s->model_replaced = 1;
     }
   }
   if (it == m->o.simplify1 && s->trainer) {
@@ -446,6 +447,7 @@ static mgs_status ms_post(void *self, mgs_strategy_step *s, mgs_error *err) {
     mgs_info("mini-splatting: iteration %d: simplification, %zu -> %zu Gaussians", it, n0, g->n);
     if ((st = reset_in_place(m, s, err))) return st;
     s->replaced_groups = all;
+    s->model_replaced = 1; /* every kept Gaussian re-initialised */
   }
   if (!m->o.dense && it == m->o.simplify2 && s->trainer) {
     size_t n0 = g->n;

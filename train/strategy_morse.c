@@ -360,6 +360,7 @@ static mgs_status ms_post(void *self, mgs_strategy_step *s, mgs_error *err) {
     s2.replaced_groups = 0;
     st = m->adc->ops->post_backward(m->adc->self, &s2, err);
     s->replaced_groups = s2.replaced_groups;
+    s->model_replaced = s2.model_replaced;
     if (pruned || spawned) s->replaced_groups = (1u << MGS_PARAM_COUNT) - 1; /* counts changed: no Adam step now */
   }
   free(keep); free(acc); free(cnt); free(rad); free(gm); free(radii);

@@ -118,7 +118,7 @@ static void t2d_destroy(void *self) {
   free(t);
 }
 
-static const mgs_term_ops t2d_ops = {"2dgs", t2d_active, t2d_image, NULL, NULL, NULL, t2d_destroy};
+static const mgs_term_ops t2d_ops = {"2dgs", t2d_active, t2d_image, NULL, NULL, NULL, t2d_destroy, NULL};
 
 mgs_status mgs_term_2dgs_create(const mgs_2dgs_term_options *o, mgs_term **out, mgs_error *err) {
   *out = NULL;

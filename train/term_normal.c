@@ -355,7 +355,7 @@ static void normal_destroy(void *self) {
 }
 
 static const mgs_term_ops normal_ops = {"normal", normal_active, NULL, normal_model_grad, normal_save, normal_load,
-                                        normal_destroy};
+                                        normal_destroy, NULL};
 
 mgs_status mgs_term_normal_create(const mgs_normal_options *o, mgs_term **out, mgs_normal_term **handle, mgs_error *err) {
   *out = NULL;

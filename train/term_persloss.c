@@ -288,7 +288,7 @@ static void pl_destroy(void *self) {
   free(t);
 }
 
-static const mgs_term_ops pl_ops = {"persloss", pl_active, pl_image_grad, NULL, NULL, NULL, pl_destroy};
+static const mgs_term_ops pl_ops = {"persloss", pl_active, pl_image_grad, NULL, NULL, NULL, pl_destroy, NULL};
 
 mgs_status mgs_term_persloss_create(const mgs_persloss_options *o, mgs_term **out, mgs_error *err) {
   *out = NULL;

@@ -145,7 +145,7 @@ static void planar_destroy(void *self) {
   free(t);
 }
 
-static const mgs_term_ops planar_ops = {"planar", planar_active, planar_image_grad, NULL, NULL, NULL, planar_destroy};
+static const mgs_term_ops planar_ops = {"planar", planar_active, planar_image_grad, NULL, NULL, NULL, planar_destroy, NULL};
 
 mgs_status mgs_term_planar_create(const mgs_gpro *pro, double weight, double weight_normal, double weight_l1, int from,
                                   mgs_term **out, mgs_error *err) {

@@ -211,7 +211,7 @@ static void sugar_destroy(void *self) {
 }
 
 static const mgs_term_ops sugar_ops = {"sugar", sugar_active, NULL, sugar_model_grad, sugar_save, sugar_load,
-                                       sugar_destroy};
+                                       sugar_destroy, NULL};
 
 mgs_status mgs_term_sugar_create(const mgs_sugar_options *o, mgs_term **out, mgs_error *err) {
   *out = NULL;

@@ -27,6 +27,7 @@ typedef struct topo_term {
      reads, so a rebuild at another iteration gives the same sums) */
   morse_gather gat;
   int built_analysis, built_it;
+  int replaced_at;             /* last iteration the strategy replaced every Gaussian (0: never) */
   size_t built_n;
   size_t n_ends;
   size_t stale;                /* pairs left out at the last evaluation (moved > 1 voxel) */
@@ -239,7 +240,16 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
 static unsigned topo_active(void *self, int it) {
   topo_term *t = self;
   if (t->ctx->o.beta <= 0) return 0;
-  return (t->ctx->r.iteration > 0 || mgs_morse_is_analysis_iteration(t->ctx, it)) ? MGS_TERM_MODEL : 0;
+  if (mgs_morse_is_analysis_iteration(t->ctx, it)) return MGS_TERM_MODEL;
+  /* an analysis of a model the strategy has since replaced (Mini-Splatting's
+     reinitialisations) guides nothing: off until the next analysis */
+  return t->ctx->r.iteration > 0 && t->ctx->r.iteration > t->replaced_at ? MGS_TERM_MODEL : 0;
+}
+
+static void topo_model_replaced(void *self, int it) {
+  topo_term *t = self;
+  t->replaced_at = it;
+  topo_clear(t);
 }
 
 static mgs_status topo_model_grad(void *self, mgs_term_step *s, mgs_error *err) {
@@ -301,8 +311,14 @@ static mgs_status gather_load(topo_term *t, FILE *f, mgs_error *err) {
 
 static mgs_status topo_save(void *self, FILE *f, mgs_error *err) {
   topo_term *t = self;
-  uint8_t own = (uint8_t)t->owns_state;
+  /* bit 7: an int32 replacement iteration follows (absent, the byte and the file are as
+     before the replacement notice existed) */
+  uint8_t own = (uint8_t)(t->owns_state | (t->replaced_at > 0 ? 0x80 : 0));
   if (fwrite(&own, 1, 1, f) != 1) return mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
+  if (t->replaced_at > 0) {
+    int32_t r = t->replaced_at;
+    if (fwrite(&r, sizeof r, 1, f) != 1) return mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
+  }
   mgs_status st = own ? mgs_morse_ctx_save(t->ctx, f, err) : MGS_OK;
   if (st == MGS_OK && !gather_save(t, f)) st = mgs_error_set(err, MGS_ERR_IO, "topo loss: cannot write its state");
   return st;
@@ -311,8 +327,16 @@ static mgs_status topo_save(void *self, FILE *f, mgs_error *err) {
 static mgs_status topo_load(void *self, FILE *f, mgs_error *err) {
   topo_term *t = self;
   uint8_t own = 0;
-  if (fread(&own, 1, 1, f) != 1 || own != (uint8_t)t->owns_state)
+  if (fread(&own, 1, 1, f) != 1 || (own & 0x7f) != (uint8_t)t->owns_state)
     return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss state does not match this run's setup");
+  t->replaced_at = 0;
+  if (own & 0x80) {
+    int32_t r = 0;
+    if (fread(&r, sizeof r, 1, f) != 1 || r <= 0)
+      return mgs_error_set(err, MGS_ERR_FORMAT, "checkpoint: the topological loss state is truncated");
+    t->replaced_at = r;
+  }
+  own &= 0x7f;
   topo_clear(t);
   mgs_status st = own ? mgs_morse_ctx_load(t->ctx, f, err) : MGS_OK;
   if (st == MGS_OK) st = gather_load(t, f, err);
@@ -330,7 +354,8 @@ static void topo_destroy(void *self) {
   free(t);
 }
 
-static const mgs_term_ops topo_ops = {"morse_topo", topo_active, NULL, topo_model_grad, topo_save, topo_load, topo_destroy};
+static const mgs_term_ops topo_ops = {"morse_topo", topo_active, NULL, topo_model_grad, topo_save, topo_load, topo_destroy,
+                                      topo_model_replaced};
 
 static topo_term *topo_new(mgs_morse_ctx *ctx, int owns_state) {
   topo_term *t = calloc(1, sizeof *t);

@@ -417,6 +417,9 @@ mgs_status mgs_trainer_step(mgs_trainer *t, mgs_error *err) {
   }
   if (use_strategy && t->strategy->ops->post_backward && (st = t->strategy->ops->post_backward(t->strategy->self, &ss, err)))
     return st;
+  if (ss.model_replaced)
+    for (size_t k = 0; k < t->n_terms; k++)
+      if (t->terms[k]->ops->model_replaced) t->terms[k]->ops->model_replaced(t->terms[k]->self, it);
   double t4 = mgs_now();
   t->phase_s[MGS_PHASE_STRATEGY] += t4 - t3;
   unsigned mask = all & ~ss.replaced_groups;

@@ -249,8 +249,8 @@ static mgs_status pull_shape(void *self, mgs_term_step *s, mgs_error *err) {
   return MGS_OK;
 }
 static void pull_destroy(void *self) { (void)self; }
-static const mgs_term_ops pull_mean_ops = {"pull-mean", pull_active, NULL, pull_mean, NULL, NULL, pull_destroy};
-static const mgs_term_ops pull_shape_ops = {"pull-shape", pull_active, NULL, pull_shape, NULL, NULL, pull_destroy};
+static const mgs_term_ops pull_mean_ops = {"pull-mean", pull_active, NULL, pull_mean, NULL, NULL, pull_destroy, NULL};
+static const mgs_term_ops pull_shape_ops = {"pull-shape", pull_active, NULL, pull_shape, NULL, NULL, pull_destroy, NULL};
 
 /* Model terms join the fused step (their gradients added in by the sink) where the
    strategy allows fusing: the result equals the trainer that never fuses (terms after a
@@ -329,8 +329,8 @@ static mgs_status depth_model(void *self, mgs_term_step *s, mgs_error *err) {
   return mgs_raster_backward(t->r, t->dc, NULL, t->dd, s->grad, NULL, err);
 }
 static void depth_destroy(void *self) { (void)self; }
-static const mgs_term_ops depth_image_ops = {"depth-image", depth_active, depth_image, NULL, NULL, NULL, depth_destroy};
-static const mgs_term_ops depth_model_ops = {"depth-model", depth_active, NULL, depth_model, NULL, NULL, depth_destroy};
+static const mgs_term_ops depth_image_ops = {"depth-image", depth_active, depth_image, NULL, NULL, NULL, depth_destroy, NULL};
+static const mgs_term_ops depth_model_ops = {"depth-model", depth_active, NULL, depth_model, NULL, NULL, depth_destroy, NULL};
 
 /* The never-fused ADC's post_backward, also keeping a copy of the full gradient of
    iteration g_snap_it (the trainer running now writes g_snap). */

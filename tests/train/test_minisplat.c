@@ -18,6 +18,7 @@
 #include <string.h>
 #include <unistd.h>
 #include "mgs_test.h"
+#include "train/mgs_term.h"
 #include "core/mgs_parallel.h"
 #include "train/synth.h"
 #include "train/mgs_train.h"
@@ -481,12 +482,22 @@ static int all_opacity(const mgs_gaussians *g, float alpha) {
   return 1;
 }
 
+/* A loss term that records the trainer's model_replaced notices (the reinitialisation and
+ * the simplification's re-initialisation replace every Gaussian; the 1 % cut does not). */
+static int notices[8], n_notices;
+static unsigned rec_active(void *self, int it) { (void)self; (void)it; return 0; }
+static void rec_replaced(void *self, int it) { (void)self; if (n_notices < 8) notices[n_notices++] = it; }
+static void rec_destroy(void *self) { (void)self; }
+static const mgs_term_ops rec_ops = {"record-replaced", rec_active, NULL, NULL, NULL, NULL, rec_destroy, rec_replaced};
+
 static void in_trainer(void) {
   mgs_train_options o;
   mgs_minisplat_options m;
   small_options(&o, &m, 0);
   mgs_error err;
   mgs_trainer *t = make(&o, &m);
+  static int rec_self;
+  CHECK_OK(mgs_trainer_add_term(t, mgs_term_create(&rec_ops, &rec_self), &err), &err);
   CHECK_OK(mgs_trainer_run_until(t, 29, &err), &err);
   size_t n29 = mgs_trainer_model(t)->n;
   CHECK_OK(mgs_trainer_step(t, &err), &err); /* 30: reinitialisation */
@@ -514,6 +525,8 @@ static void in_trainer(void) {
   CHECK_OK(mgs_trainer_step(t, &err), &err); /* 80: the 1 % cut */
   CHECK_MSG(mgs_trainer_model(t)->n < n79 && mgs_trainer_model(t)->n > n79 / 2, "%zu -> %zu", n79, mgs_trainer_model(t)->n);
   CHECK_OK(mgs_trainer_run(t, &err), &err);
+  /* the terms were told of the two replacements, not of the cut nor of densification */
+  CHECK_MSG(n_notices == 2 && notices[0] == 30 && notices[1] == 60, "%d notices (%d, %d)", n_notices, notices[0], notices[1]);
   double psnr, ssim;
   CHECK_OK(mgs_trainer_evaluate(t, MGS_SPLIT_TEST, 0, &psnr, &ssim, &err), &err);
   fprintf(stderr, "mini-splatting: %zu -> %zu (reinit) ... %zu (before simplifying) ... %zu Gaussians, test PSNR %.2f\n", n29,

@@ -160,8 +160,67 @@ static void directional_fd(void) {
   mgs_gaussians_destroy(gr);
 }
 
+/* A strategy that replaces every Gaussian (Mini-Splatting's reinitialisations) makes the
+ * analysis of the old model void: the term is off from the next iteration until the next
+ * analysis, and stays so across a checkpoint; a run without replacement writes the same
+ * checkpoint bytes as before the notice existed. */
+static void replaced(void) {
+  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
+  mgs_morse_options o;
+  options(&o, MGS_MORSE_TOPO_ELIMINATE);
+  o.warmup = 1; o.every = 10; o.until = 21; /* analyses at 1, 11, 21 */
+  mgs_morse_ctx *c = NULL, *c2 = NULL;
+  mgs_term *t = NULL, *t2 = NULL;
+  mgs_error err;
+  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c, &err), &err);
+  CHECK_OK(mgs_term_topo_create(c, 1, &t, &err), &err);
+  mgs_term_step s;
+  memset(&s, 0, sizeof s);
+  s.model = g; s.grad = gr; s.iterations = 100; s.iteration = 1;
+  zero(gr, g->n);
+  CHECK(t->ops->active(t->self, 1) == MGS_TERM_MODEL);
+  CHECK_OK(t->ops->model_grad(t->self, &s, &err), &err);
+  CHECK(t->ops->active(t->self, 2) == MGS_TERM_MODEL); /* the analysis of 1 guides 2..10 */
+  /* the checkpoint without a replacement: the byte that says so is the plain owner flag */
+  char *buf = NULL;
+  size_t len = 0;
+  FILE *f = open_memstream(&buf, &len);
+  CHECK_OK(t->ops->save(t->self, f, &err), &err);
+  fclose(f);
+  CHECK(len > 0 && buf && (unsigned char)buf[0] == 1);
+  free(buf);
+  CHECK(t->ops->model_replaced != NULL);
+  t->ops->model_replaced(t->self, 5);
+  for (int it = 6; it <= 10; it++) CHECK_MSG(t->ops->active(t->self, it) == 0, "active at %d after the replacement at 5", it);
+  CHECK(t->ops->active(t->self, 11) == MGS_TERM_MODEL); /* the next analysis */
+  /* across a checkpoint: a fresh term loading the state is off too */
+  f = open_memstream(&buf, &len);
+  CHECK_OK(t->ops->save(t->self, f, &err), &err);
+  fclose(f);
+  CHECK(len > 5 && (unsigned char)buf[0] == (1 | 0x80));
+  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c2, &err), &err);
+  CHECK_OK(mgs_term_topo_create(c2, 1, &t2, &err), &err);
+  f = fmemopen(buf, len, "rb");
+  CHECK_OK(t2->ops->load(t2->self, f, &err), &err);
+  fclose(f);
+  free(buf);
+  CHECK(t2->ops->active(t2->self, 7) == 0 && t2->ops->active(t2->self, 11) == MGS_TERM_MODEL);
+  /* the analysis at 11 makes it guide again */
+  s.iteration = 11;
+  zero(gr, g->n);
+  CHECK_OK(t->ops->model_grad(t->self, &s, &err), &err);
+  CHECK(t->ops->active(t->self, 12) == MGS_TERM_MODEL);
+  mgs_term_destroy(t);
+  mgs_term_destroy(t2);
+  mgs_morse_ctx_unref(c);
+  mgs_morse_ctx_unref(c2);
+  mgs_gaussians_destroy(g);
+  mgs_gaussians_destroy(gr);
+}
+
 int main(void) {
   mgs_parallel_set_threads(1);
+  RUN(replaced);
   RUN(directional_fd);
   RUN(eliminate);
   RUN(literal);

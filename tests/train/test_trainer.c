@@ -147,8 +147,8 @@ static mgs_status toy_load(void *self, FILE *f, mgs_error *err) {
   return fread(&((toy_term *)self)->calls, 8, 1, f) == 1 ? MGS_OK : mgs_error_set(err, MGS_ERR_FORMAT, "toy: read");
 }
 static void toy_destroy(void *self) { free(self); }
-static const mgs_term_ops toy_model_ops = {"toy-model", toy_active, NULL, toy_model, toy_save, toy_load, toy_destroy};
-static const mgs_term_ops toy_image_ops = {"toy-image", toy_active, toy_image, NULL, toy_save, toy_load, toy_destroy};
+static const mgs_term_ops toy_model_ops = {"toy-model", toy_active, NULL, toy_model, toy_save, toy_load, toy_destroy, NULL};
+static const mgs_term_ops toy_image_ops = {"toy-image", toy_active, toy_image, NULL, toy_save, toy_load, toy_destroy, NULL};
 
 static toy_term *add_toy(mgs_trainer *t, int model, double w, int every) {
   toy_term *tt = calloc(1, sizeof *tt);

@@ -245,6 +245,25 @@ void mgs_run_record_origin(mgs_settings *s, const mgs_dataset *ds) {
 
 /* ---- a model trained elsewhere ------------------------------------------------------- */
 
+/* Whether `path` (which need not exist yet; its parent must) lies in the folder `dir_abs`
+   (an absolute, resolved path). */
+static int path_within(const char *path, const char *dir_abs) {
+  char *abs = realpath(path, NULL);
+  if (!abs) {
+    char *parent = mgs_path_dirname(path), *pabs = parent ? realpath(parent, NULL) : NULL;
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    abs = pabs ? mgs_path_join(pabs, base) : NULL;
+    free(parent);
+    free(pabs);
+  }
+  if (!abs) return 0;
+  const size_t n = strlen(dir_abs);
+  const int in = !strncmp(abs, dir_abs, n) && (abs[n] == 0 || abs[n] == '/');
+  free(abs);
+  return in;
+}
+
 mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, int downscale,
                           const char *out_dir, mgs_error *err) {
   if (downscale < 1) return mgs_error_set(err, MGS_ERR_ARG, "%s: downscale %d; it is a factor >= 1", out_dir, downscale);
@@ -271,6 +290,9 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
   if (st == MGS_OK) st = mgs_ply_read_gaussians_local(model_path, ds->origin, &g, err);
   char *src = st == MGS_OK ? realpath(dataset_dir, NULL) : NULL, *from = st == MGS_OK ? realpath(model_path, NULL) : NULL;
   if (st == MGS_OK && (!src || !from)) st = mgs_error_set(err, MGS_ERR_IO, "%s: cannot resolve the dataset's or the model's path", out_dir);
+  if (st == MGS_OK && path_within(out_dir, src))
+    st = mgs_error_set(err, MGS_ERR_ARG, "%s: the run folder is inside the dataset folder %s; choose another (the dataset is never written to)",
+                       out_dir, src);
   if (st == MGS_OK) st = mgs_mkdir_p(out_dir, err);
   if (st == MGS_OK) st = mgs_run_write_ply(out_dir, 0, g, err);
   if (st == MGS_OK) st = mgs_run_write_cameras(out_dir, ds, err);

@@ -82,6 +82,9 @@ int main(void) {
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images 2>/dev/null", cli, path, data, imported) == 1);
   CHECK(mgs_test_sh("%s eval %s --data %s --no-images 2>/dev/null", cli, path, data) == 2); /* -o missing */
   CHECK(mgs_test_sh("%s eval %s/nothing.spz --data %s -o %s/imp2 2>/dev/null", cli, tmp, data, tmp) == 1);
+  CHECK(mgs_test_sh("%s eval %s --data %s -o %s/inside 2>/dev/null", cli, path, data, data) == 1); /* never into the dataset */
+  snprintf(imported, sizeof imported, "%s/inside", data);
+  CHECK(!mgs_path_exists(imported));
   snprintf(path, sizeof path, "%s/imp2/cfg_args", tmp);
   CHECK(!mgs_path_exists(path));
   /* with the dataset's default background (white for NeRF-synthetic) the figures differ */

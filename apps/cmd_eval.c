@@ -21,8 +21,9 @@ static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs eval RUN [options]\n"
     "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [--downscale N] [options]\n"
-    "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's .ply, 2DGS, SuperSplat's\n"
-    "  .compressed.ply, .splat, .spz, .sog or a SOG meta.json, .ksplat), first made the run folder RUN\n"
+    "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's output folder or\n"
+    "  .ply, 2DGS, SuperSplat's .compressed.ply, .splat, .spz, .sog or a SOG meta.json, .ksplat), first\n"
+    "  made the run folder RUN\n"
     "  (point_cloud/iteration_0, the dataset's cameras.json, cfg_args; RUN must not exist or be empty),\n"
     "  then evaluated as one; --background: the dataset's default (white for NeRF-synthetic) unless given;\n"
     "  --downscale N: the images at 1/N size, as the model was trained (the reference's --resolution N)\n"

@@ -334,7 +334,8 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
                         mgs_gaussians **g, int *iteration_out, mgs_error *err);
 
 /* A run folder for a model trained elsewhere, so that eval/render/vdb treat it as one of
- * ours: `model_path` (any format mgs_ply_read_gaussians reads: the reference .ply, 2DGS,
+ * ours: `model_path` (a folder in the reference's output layout: its latest iteration; or a file
+ * in any format mgs_ply_read_gaussians reads: the reference .ply, 2DGS,
  * SuperSplat's compressed .ply, .splat, .spz, SOG, .ksplat) becomes out_dir/point_cloud/iteration_0/
  * point_cloud.ply, with the dataset's cameras.json and a cfg_args naming the dataset (its
  * absolute path), the background (white_background: 1 white, 0 black, -1 the dataset's

@@ -278,6 +278,16 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
     }
     if (!empty) return mgs_error_set(err, MGS_ERR_IO, "%s exists and is not an empty folder; nothing is written into it", out_dir);
   }
+  /* a folder in the reference's output layout: its latest point_cloud/iteration_N */
+  char *model_file = NULL;
+  if (mgs_is_dir(model_path)) {
+    const int it = mgs_run_latest_iteration(model_path);
+    if (it < 0) return mgs_error_set(err, MGS_ERR_IO, "%s: a folder without point_cloud/iteration_N/point_cloud.ply", model_path);
+    char sub[96];
+    snprintf(sub, sizeof sub, "point_cloud/iteration_%d/point_cloud.ply", it);
+    if (!(model_file = mgs_path_join(model_path, sub))) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+    model_path = model_file;
+  }
   mgs_dataset_options o;
   mgs_dataset_options_default(&o);
   o.load_images = 0;
@@ -317,6 +327,7 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
   }
   free(src);
   free(from);
+  free(model_file);
   mgs_gaussians_destroy(g);
   mgs_dataset_destroy(ds);
   return st;

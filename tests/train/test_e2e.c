@@ -79,6 +79,11 @@ int main(void) {
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
   CHECK_NEAR(results_psnr(imported, 0), psnr, 1e-9);
+  /* the run folder itself as MODEL (the reference's output layout): its latest iteration */
+  char imported_dir[4400];
+  snprintf(imported_dir, sizeof imported_dir, "%s/imported_dir", tmp);
+  CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images > /dev/null", cli, run, data, imported_dir) == 0);
+  CHECK_NEAR(results_psnr(imported_dir, 0), psnr, 1e-9);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images 2>/dev/null", cli, path, data, imported) == 1);
   CHECK(mgs_test_sh("%s eval %s --data %s --no-images 2>/dev/null", cli, path, data) == 2); /* -o missing */
   CHECK(mgs_test_sh("%s eval %s/nothing.spz --data %s -o %s/imp2 2>/dev/null", cli, tmp, data, tmp) == 1);

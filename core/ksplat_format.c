@@ -5,11 +5,12 @@
  * byte / 255 through the logit; SH stored channel by channel within each degree (degree 1:
  * R0 R1 R2 G0 ..., degree 2: R3..R7 G3..., degree 3: R8..R14 ...). */
 #include "core/ksplat_format.h"
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "core/mgs_fs.h"
 
 #define MAIN_HEADER 4096
 #define SECTION_HEADER 1024
@@ -39,38 +40,13 @@ static double f16(const uint8_t *p) {
 static const int CENTER[3] = {12, 6, 6}, SCALE[3] = {12, 6, 6}, ROT[3] = {16, 8, 8}, SHB[3] = {4, 2, 1};
 static const int SH_COUNT[4] = {0, 9, 24, 45};
 
-static mgs_status read_all(const char *path, uint8_t **buf, size_t *size, mgs_error *err) {
-  *buf = NULL;
-  FILE *f = fopen(path, "rb");
-  if (!f) return mgs_error_set(err, MGS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-  long n = -1;
-  if (fseek(f, 0, SEEK_END) == 0) n = ftell(f);
-  if (n < 0 || fseek(f, 0, SEEK_SET) != 0) {
-    fclose(f);
-    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot read its size", path);
-  }
-  *buf = malloc(n ? (size_t)n : 1);
-  if (!*buf) {
-    fclose(f);
-    return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for %ld bytes", path, n);
-  }
-  const size_t got = fread(*buf, 1, (size_t)n, f);
-  fclose(f);
-  if (got != (size_t)n) {
-    free(*buf);
-    *buf = NULL;
-    return mgs_error_set(err, MGS_ERR_IO, "%s: short read", path);
-  }
-  *size = (size_t)n;
-  return MGS_OK;
-}
-
 mgs_status ksplat_read_gaussians(const char *path, mgs_gaussians **g, double **xyz64, mgs_error *err) {
   *g = NULL;
   *xyz64 = NULL;
-  uint8_t *b = NULL;
+  char *text = NULL;
   size_t size = 0;
-  mgs_status st = read_all(path, &b, &size, err);
+  mgs_status st = mgs_read_file(path, &text, &size, err);
+  uint8_t *b = (uint8_t *)text;
   if (st) return st;
   mgs_gaussians *m = NULL;
   double *xyz = NULL;

@@ -115,28 +115,21 @@ mgs_status mgs_ply_read_gaussians(const char *path, mgs_gaussians **out, mgs_err
 
 mgs_status mgs_ply_read_gaussians_local(const char *path, const double *origin, mgs_gaussians **out, mgs_error *err) {
   *out = NULL;
-  if (splat_is_path(path)) { /* the web viewers' .splat (core/splat_format.h) */
+  /* the splat formats told by their file name; each decodes everything but the placed means */
+  static const struct {
+    int (*is_path)(const char *path);
+    mgs_status (*read)(const char *path, mgs_gaussians **g, double **xyz64, mgs_error *err);
+  } named[] = {
+      {splat_is_path, splat_read_gaussians},   /* the web viewers' .splat (core/splat_format.h) */
+      {ksplat_is_path, ksplat_read_gaussians}, /* GaussianSplats3D's .ksplat (core/ksplat_format.h) */
+      {sog_is_path, sog_read_gaussians},       /* PlayCanvas's SOG: a .sog or its meta.json (core/sog_format.h) */
+      {spz_is_path, spz_read_gaussians},       /* Niantic's .spz (core/spz_format.h) */
+  };
+  for (size_t k = 0; k < sizeof named / sizeof named[0]; k++) {
+    if (!named[k].is_path(path)) continue;
     mgs_gaussians *g = NULL;
     double *xyz64 = NULL;
-    mgs_status st = splat_read_gaussians(path, &g, &xyz64, err);
-    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
-  }
-  if (ksplat_is_path(path)) { /* GaussianSplats3D's .ksplat (core/ksplat_format.h) */
-    mgs_gaussians *g = NULL;
-    double *xyz64 = NULL;
-    mgs_status st = ksplat_read_gaussians(path, &g, &xyz64, err);
-    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
-  }
-  if (sog_is_path(path)) { /* PlayCanvas's SOG: a .sog bundle or its meta.json (core/sog_format.h) */
-    mgs_gaussians *g = NULL;
-    double *xyz64 = NULL;
-    mgs_status st = sog_read_gaussians(path, &g, &xyz64, err);
-    return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
-  }
-  if (spz_is_path(path)) { /* Niantic's .spz (core/spz_format.h) */
-    mgs_gaussians *g = NULL;
-    double *xyz64 = NULL;
-    mgs_status st = spz_read_gaussians(path, &g, &xyz64, err);
+    mgs_status st = named[k].read(path, &g, &xyz64, err);
     return st != MGS_OK ? st : place_means(path, g, xyz64, origin, out, err);
   }
   ply_file pf;

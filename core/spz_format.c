@@ -3,7 +3,6 @@
  * scale, alpha byte / 255 the opacity after the sigmoid, colour (byte / 255 - 0.5) / 0.15 the
  * DC coefficient, SH (byte - 128) / 128, interleaved [coefficient][channel] like our sh_rest. */
 #include "core/spz_format.h"
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,6 +10,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "core/mgs_fs.h"
 #include "core/mgs_log.h"
 
 #define NGSP_MAGIC 0x5053474eu
@@ -296,38 +296,14 @@ static mgs_status decode(const spz_data *d, mgs_gaussians *g, double *xyz, mgs_e
   return MGS_OK;
 }
 
-static mgs_status read_file(const char *path, uint8_t **buf, size_t *size, mgs_error *err) {
-  *buf = NULL;
-  FILE *f = fopen(path, "rb");
-  if (!f) return mgs_error_set(err, MGS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-  long n = -1;
-  if (fseek(f, 0, SEEK_END) == 0) n = ftell(f);
-  if (n < 0 || fseek(f, 0, SEEK_SET) != 0) {
-    fclose(f);
-    return mgs_error_set(err, MGS_ERR_IO, "%s: cannot read its size", path);
-  }
-  *size = (size_t)n;
-  *buf = malloc(n ? (size_t)n : 1);
-  if (!*buf) {
-    fclose(f);
-    return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory for %ld bytes", path, n);
-  }
-  const size_t got = fread(*buf, 1, (size_t)n, f);
-  fclose(f);
-  if (got != (size_t)n) {
-    free(*buf);
-    *buf = NULL;
-    return mgs_error_set(err, MGS_ERR_IO, "%s: short read", path);
-  }
-  return MGS_OK;
-}
-
 mgs_status spz_read_gaussians(const char *path, mgs_gaussians **g, double **xyz64, mgs_error *err) {
   *g = NULL;
   *xyz64 = NULL;
-  uint8_t *file = NULL, *data = NULL;
+  char *text = NULL;
+  uint8_t *data = NULL;
   size_t size = 0;
-  mgs_status st = read_file(path, &file, &size, err);
+  mgs_status st = mgs_read_file(path, &text, &size, err);
+  uint8_t *file = (uint8_t *)text;
   if (st != MGS_OK) return st;
   spz_data d;
   memset(&d, 0, sizeof d);

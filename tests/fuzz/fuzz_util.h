@@ -36,4 +36,18 @@ static inline void fuzz_write(const char *path, const uint8_t *data, size_t n) {
   if (n && fwrite(data, 1, n, f) != n) abort();
   fclose(f);
 }
+/* Reads `path` as Gaussians: success returns a model, failure returns none and names the
+ * file (`name`, the path's last part); anything else aborts (a finding). */
+#include "core/mgs_ply.h"
+static inline void fuzz_check_gaussians(const char *path, const char *name) {
+  mgs_error err;
+  mgs_gaussians *g = NULL;
+  if (mgs_ply_read_gaussians(path, &g, &err) == MGS_OK) {
+    if (!g) abort();
+    mgs_gaussians_destroy(g);
+  } else if (g || !strstr(err.msg, name)) {
+    abort();
+  }
+}
+
 #endif

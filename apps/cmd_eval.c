@@ -33,7 +33,8 @@ static void usage(FILE *f) {
     "                         alpha-field's surface and the depth-fused one (morsegs vdb RUN)\n"
     "      --no-images        do not write the side-by-side PNGs\n"
     "      --max-views N      evaluate at most N views (evenly spaced)\n"
-    "      --depth median|expected, --fuse-voxel F, --trunc F, --trunc-back F, --trunc-thin F, --min-weight W, --carve\n"
+    "      --depth median|expected, --fuse-voxel F, --trunc F, --trunc-back F, --trunc-thin F, --min-weight W, --carve,\n"
+    "      --mask-carve PX|off\n"
     "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
     "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n"
     "  With RUN/mesh/sugar.ply (morsegs vdb RUN --sugar-mesh) its geometry is reported too (geometry.sugar).\n");
@@ -63,7 +64,7 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"depth", required_argument, 0, 'Z'}, {"fuse-voxel", required_argument, 0, 'x'},
                                        {"trunc", required_argument, 0, 'T'}, {"min-weight", required_argument, 0, 'W'},
                                        {"trunc-back", required_argument, 0, 'B'}, {"trunc-thin", required_argument, 0, 'N'},
-                                       {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'},
+                                       {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'}, {"mask-carve", required_argument, 0, 1001},
                                        {"data", required_argument, 0, 'D'}, {"output", required_argument, 0, 'o'},
                                        {"background", required_argument, 0, 'G'}, {"downscale", required_argument, 0, 'R'},
                                        {0, 0, 0, 0}};
@@ -101,6 +102,17 @@ int mgs_cmd_eval(int argc, char **argv) {
         else { fprintf(stderr, "morsegs eval: --background '%s': expected white or black\n", optarg); return 2; }
         break;
       case 'C': fo.carve = 1; break;
+      case 1001: {
+        char *end;
+        long px = strtol(optarg, &end, 10);
+        if (!strcmp(optarg, "off")) px = -1, end = optarg + 3;
+        if (!*optarg || *end || px < -1 || px > 64) {
+          fprintf(stderr, "morsegs eval: --mask-carve '%s': expected a margin in pixels 0..64, or off\n", optarg);
+          return 2;
+        }
+        fo.mask_carve_px = (int)px;
+        break;
+      }
       case 'Z':
         if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
         else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;

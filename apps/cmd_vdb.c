@@ -49,6 +49,8 @@ static void usage(FILE *f) {
           "  --fuse-voxel-size H, --trunc-size T   the same in world units (override)\n"
           "  --min-weight W           views a voxel needs to count as observed (1)\n"
           "  --carve                  background pixels carve free space (off: it erodes surfaces)\n"
+          "  --mask-carve PX|off      pixels PX or more outside the dataset images' silhouettes carve free\n"
+          "                           space (2): floaters seen through the model are not fused\n"
           "  --resolution R           voxels along the diagonal of the means' bounding box (256)\n"
           "  --voxel-size H           absolute voxel size (overrides --resolution)\n"
           "  --tau T                  iso value of the surface {A = T} (0.5)\n"
@@ -96,7 +98,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"fuse-voxel", required_argument, 0, 'x'}, {"trunc", required_argument, 0, 'T'},
       {"trunc-thin", required_argument, 0, 'K'},
       {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
-      {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'},
+      {"min-weight", required_argument, 0, 'W'}, {"carve", no_argument, 0, 'C'}, {"mask-carve", required_argument, 0, 1001},
       {"sugar-mesh", no_argument, 0, 'g'},       {"sugar-level", required_argument, 0, 'l'},
       {"sugar-points", required_argument, 0, 'p'}, {"sugar-triangles", required_argument, 0, 'q'},
       {"sugar-trim", required_argument, 0, 'u'}, {"surface", required_argument, 0, 'j'},
@@ -179,6 +181,17 @@ int mgs_cmd_vdb(int argc, char **argv) {
         break;
       case 'D': from_depth = 1; break;
       case 'C': fo.carve = 1; break;
+      case 1001: {
+        char *end;
+        long px = strtol(optarg, &end, 10);
+        if (!strcmp(optarg, "off")) px = -1, end = optarg + 3;
+        if (!*optarg || *end || px < -1 || px > 64) {
+          fprintf(stderr, "morsegs vdb: --mask-carve '%s': expected a margin in pixels 0..64, or off\n", optarg);
+          return 2;
+        }
+        fo.mask_carve_px = (int)px;
+        break;
+      }
       case 'A': from_alpha = 1; break;
       case 'N': no_alpha = 1; break;
       case 'j':

@@ -49,14 +49,14 @@ void mgs_vdb_tsdf_destroy(mgs_vdb_tsdf *t);
 
 /* What an integration did (any pointer argument taking it may be NULL). */
 typedef struct mgs_vdb_tsdf_info {
-  size_t views_used;      /* views with at least one valid depth pixel */
+  size_t views_used;      /* views with at least one valid depth or background (< 0) pixel */
   size_t pixels_used;     /* valid depth pixels */
   size_t blocks;          /* allocated 8^3 blocks after the call */
   size_t voxels_observed; /* voxels with weight > 0 after the call */
 } mgs_vdb_tsdf_info;
 
 /* Fuses n views (depth[k]: cams[k].height * width floats). May be called repeatedly
- * (batches of views). Views without any valid pixel are skipped (counted in info). */
+ * (batches of views). Views without any valid or background (< 0) pixel are skipped (counted in info). */
 mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mgs_camera *cams, const float *const *depth,
                                   mgs_vdb_tsdf_info *info, mgs_error *err);
 

@@ -238,8 +238,12 @@ extern "C" mgs_status mgs_vdb_tsdf_integrate(mgs_vdb_tsdf *t, size_t n, const mg
     });
     std::vector<View> used;
     size_t pixels = 0;
-    for (size_t i = 0; i < views.size(); i++)
-      if (pix[i]) used.push_back(views[i]), pixels += pix[i];
+    for (size_t i = 0; i < views.size(); i++) {
+      bool carves = false;  // a view of background pixels only still carves the blocks others allocated
+      const size_t np = (size_t)views[i].cam->width * views[i].cam->height;
+      for (size_t p = 0; !pix[i] && !carves && p < np; p++) carves = views[i].depth[p] < 0;
+      if (pix[i] || carves) used.push_back(views[i]), pixels += pix[i];
+    }
     for (auto &k : keys)
       for (const Coord &c : k) {
         const Coord o(c[0] * 8, c[1] * 8, c[2] * 8);

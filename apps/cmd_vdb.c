@@ -50,7 +50,7 @@ static void usage(FILE *f) {
           "  --min-weight W           views a voxel needs to count as observed (1)\n"
           "  --carve                  background pixels carve free space (off: it erodes surfaces)\n"
           "  --mask-carve PX|off      pixels PX or more outside the dataset images' silhouettes carve free\n"
-          "                           space (2): floaters seen through the model are not fused\n"
+          "                           space (4): floaters seen through the model are not fused\n"
           "  --resolution R           voxels along the diagonal of the means' bounding box (256)\n"
           "  --voxel-size H           absolute voxel size (overrides --resolution)\n"
           "  --tau T                  iso value of the surface {A = T} (0.5)\n"

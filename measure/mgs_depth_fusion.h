@@ -48,7 +48,7 @@ typedef struct mgs_fusion_opts {
   int image_alpha;           /* use the dataset images' alpha as masks when available (1) */
   int carve;                 /* every background pixel carves free space (0: it erodes; docs/notes/depth-fusion.md) */
   int mask_carve_px;         /* pixels whose image mask is background within this many pixels carve free
-                                space (2; -1: off): the images' silhouettes remove fragments fused from
+                                space (4; -1: off): the images' silhouettes remove fragments fused from
                                 floaters seen through a semi-transparent model (docs/notes/depth-fusion.md) */
   size_t keep_points;        /* > 0: keep up to this many of the views' surface points in the report (0) */
 } mgs_fusion_opts;

@@ -190,7 +190,7 @@ static void test_fusion_cli(void) {
  * whose train and test views share names (train/r_0 and test/r_0, as the original lego):
  * the floater is seen in front of the shape from above (inside the images' silhouettes:
  * fused there) and outside the silhouettes from the side. The images' silhouettes carve
- * it (--mask-carve, default 2 px); with the carving off it is a surface of its own. The
+ * it (--mask-carve, default 4 px); with the carving off it is a surface of its own. The
  * test views' masks must be their own: with a train view's mask of the same name
  * (matching by name alone), the carving eats the shape. */
 static size_t near_point(const mgs_mesh *m, const double c[3], double r) {
@@ -308,7 +308,11 @@ static void test_image_masks(void) {
           fit[1].at_floater, fit[0].on_shape, fit[1].on_shape, fit[0].covered, fit[1].covered, fit[0].gt_n);
   CHECK_MSG(fit[1].at_floater > 20, "without carving the floater must be fused (else this test proves nothing)");
   CHECK_MSG(fit[0].at_floater == 0, "the images' silhouettes did not carve the floater");
-  CHECK_MSG(fit[0].nv > 0 && fit[0].on_shape == fit[0].nv, "with carving, a surface away from the shape remains");
+  /* (fragments within the 4-px margin of a 64-px view may stay: measured 199 of 10,371 vertices
+   * against 3,612 of 13,789 without carving) */
+  CHECK_MSG(fit[0].nv > 0 && fit[0].on_shape >= 0.97 * fit[0].nv &&
+                fit[0].nv - fit[0].on_shape < 0.1 * (fit[1].nv - fit[1].on_shape),
+            "with carving, a surface away from the shape remains");
   CHECK_MSG(fit[0].covered >= 0.98 * fit[0].gt_n && fit[0].covered >= fit[1].covered,
             "carving removed part of the shape's surface");
   /* the 8 test views alone (named r_0..r_7 like 8 train views at other poses): each must be

@@ -13,7 +13,10 @@
  *
  * Resume: a run is finished when RUN/result.json exists (written atomically, last);
  * running again on the same DIR keeps finished runs and redoes unfinished ones from the
- * start (an interrupted run's wall time would not be comparable).
+ * start (an interrupted run's wall time would not be comparable). --reevaluate evaluates
+ * the finished runs another build evaluated (result.json's evaluator: a fingerprint of the
+ * binary) again from their saved models: never trained again, refused for a folder that is
+ * not this command's, previous records kept.
  *
  * Variants are `morsegs train` flag sets (table below). A variant whose flags `morsegs
  * train` rejects (exit code 2, a usage error, before any training) is reported "not
@@ -25,6 +28,7 @@
 #include <fcntl.h>
 #include <getopt.h>
 #include <limits.h>
+#include <stdint.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -115,6 +119,9 @@ static void usage(FILE *f) {
     "      --first LIST       in each seed, these variants' runs on every dataset come before the others'\n"
     "                         (e.g. the baselines, so that a run stopped early compares them on every scene)\n"
     "      --plan             print the runs, how many are finished and the estimated time; train nothing\n"
+    "      --reevaluate       the finished runs another build evaluated are evaluated again by this one (their\n"
+    "                         saved models, never trained again; after the evaluation changed; resumable):\n"
+    "                         the previous result.json and eval_N.json are kept as *.before-reevaluation.json\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
 }
@@ -276,7 +283,27 @@ typedef struct experiment {
   double load_start;
   size_t planned;
   int failures, jobs;
+  int reevaluate;             /* --reevaluate: finished runs evaluated by another binary are evaluated again, never trained */
+  char evaluator[24];         /* this binary's fingerprint (exp_run.evaluator) */
 } experiment;
+
+/* FNV-1a 64 of this binary's bytes: which build evaluated a run (a rebuilt binary that
+ * evaluates differently has other bytes; the same build anywhere has the same). */
+static void binary_fingerprint(char out[24]) {
+  uint64_t h = 1469598103934665603ull;
+  FILE *f = fopen("/proc/self/exe", "rb");
+  unsigned char buf[1 << 16];
+  size_t n;
+  while (f && (n = fread(buf, 1, sizeof buf, f)) > 0)
+    for (size_t i = 0; i < n; i++) h = (h ^ buf[i]) * 1099511628211ull;
+  if (f) fclose(f);
+  snprintf(out, 24, "%016llx", (unsigned long long)h);
+}
+
+/* --reevaluate: a finished run whose record another binary wrote. */
+static int needs_reevaluation(const experiment *e, const exp_run *r) {
+  return e->reevaluate && strcmp(r->evaluator, e->evaluator) != 0;
+}
 
 static exp_run *push_run(experiment *e) {
   if (e->n_runs == e->cap_runs) {
@@ -397,6 +424,33 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     }
     free(text);
   }
+  /* --reevaluate: a finished run keeps its model; its old records are kept beside it */
+  char *prev_record = mgs_path_join(it->dir, "result.json");
+  exp_run prev;
+  const int reeval = e->reevaluate && prev_record && mgs_path_exists(prev_record) &&
+                     exp_run_read(prev_record, &prev, &err) == MGS_OK && needs_reevaluation(e, &prev);
+  free(prev_record);
+  if (reeval && !trained) {
+    snprintf(reason, reason_n, "%.700s: cannot evaluate again: its experiment_args differ from this command's, or its "
+             "final model or train_stats.json is missing (nothing was changed)", it->dir);
+    free(sigp); free(ckpt);
+    return 1;
+  }
+  if (reeval) {
+    char name[64], keep[96];
+    for (int k = -1; k < e->n_evals; k++) {
+      if (k < 0) snprintf(name, sizeof name, "result.json");
+      else snprintf(name, sizeof name, "eval_%d.json", e->evals[k]);
+      snprintf(keep, sizeof keep, "%.*s.before-reevaluation.json", (int)(strlen(name) - 5), name);
+      char *from = mgs_path_join(it->dir, name), *to = mgs_path_join(it->dir, keep);
+      if (from && to && mgs_path_exists(from) && rename(from, to)) {
+        snprintf(reason, reason_n, "%.900s: cannot keep %s: %s", it->dir, name, strerror(errno));
+        free(from); free(to); free(sigp); free(ckpt);
+        return 1;
+      }
+      free(from); free(to);
+    }
+  }
   if (!trained && !resume) {
     if (mgs_is_dir(it->dir) && mgs_remove_tree(it->dir, &err)) { snprintf(reason, reason_n, "%s", err.msg); free(sigp); free(ckpt); return 1; }
     if (mgs_mkdir_p(it->dir, &err) || mgs_write_file_atomic(sigp, sig, strlen(sig), &err)) {
@@ -459,7 +513,7 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     int iter = e->evals[k];
     if (it->sweep && iter != e->iters) continue;
     if (sugar && iter == e->iters) {
-      const char *mv[] = {"morsegs", "vdb", it->dir, "--sugar-mesh", NULL};
+      const char *mv[] = {"morsegs", "vdb", it->dir, "--sugar-mesh", "--force", NULL}; /* an interrupted evaluation's mesh, or --reevaluate */
       if ((result = run_step(mv, elog, "morsegs vdb --sugar-mesh", reason, reason_n))) goto done;
     }
     char ply[PATH_MAX + 64];
@@ -507,7 +561,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     out->n_points++;
   }
   if (out->n_points == 0) { snprintf(reason, reason_n, "%.900s: no saved model to evaluate", it->dir); result = 1; goto done; }
-  out->run_seconds = mgs_now() - run_t0;
+  snprintf(out->evaluator, sizeof out->evaluator, "%s", e->evaluator);
+  out->run_seconds = reeval ? prev.run_seconds : mgs_now() - run_t0; /* re-evaluated: the run's own wall time */
   out->eval_cpu_seconds = cpu_with_children() - eval_cpu0;
   {
     char *rp = mgs_path_join(it->dir, "result.json");
@@ -724,7 +779,7 @@ static int check_settings(experiment *e, mgs_error *err) {
 
 int mgs_cmd_experiment(int argc, char **argv) {
   enum { O_VARIANTS = 1000, O_SEEDS, O_ITERS, O_EVALS, O_EVAL_AT, O_MESH, O_SWEEP, O_SWEEP_VARS, O_SWEEP_SEEDS, O_KNOB,
-         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_FIRST, O_SWEEP_OF, O_HELP };
+         O_TRAIN_ARG, O_EVAL_VIEWS, O_TOPO_RES, O_VARIANT, O_REPORT_FROM, O_BASE, O_JOBS, O_PLAN, O_VARIANT_SEEDS, O_FIRST, O_SWEEP_OF, O_REEVALUATE, O_HELP };
   static const struct option opts[] = {
     {"output", required_argument, 0, 'o'}, {"variants", required_argument, 0, O_VARIANTS},
     {"seeds", required_argument, 0, O_SEEDS}, {"iters", required_argument, 0, O_ITERS},
@@ -734,7 +789,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     {"knob", required_argument, 0, O_KNOB}, {"train-arg", required_argument, 0, O_TRAIN_ARG},
     {"eval-views", required_argument, 0, O_EVAL_VIEWS}, {"topo-res", required_argument, 0, O_TOPO_RES},
     {"variant", required_argument, 0, O_VARIANT}, {"report-from", required_argument, 0, O_REPORT_FROM},
-    {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN},
+    {"base", required_argument, 0, O_BASE}, {"jobs", required_argument, 0, O_JOBS}, {"plan", no_argument, 0, O_PLAN}, {"reevaluate", no_argument, 0, O_REEVALUATE},
     {"variant-seeds", required_argument, 0, O_VARIANT_SEEDS}, {"first", required_argument, 0, O_FIRST},
     {"sweep-of", required_argument, 0, O_SWEEP_OF},
     {"help", no_argument, 0, O_HELP}, {0, 0, 0, 0}};
@@ -743,6 +798,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
   e.iters = 30000; e.seeds = 3; e.sweep_seeds = 0; e.topo_res = EXP_TOPO_RES; /* sweep_seeds 0: as --seeds */
   int n_evals = 4, rc = 1, lock_fd = -1, plan_only = 0;
   e.jobs = 1;
+  binary_fingerprint(e.evaluator);
   const char *variants = NULL, *eval_at = NULL, *mesh = NULL, *sweep = "0.25,0.5,2,4", *sweep_vars = NULL, *report_from = NULL;
   strlist knobs = {0}, vlist = {0}, svlist = {0}, custom = {0}, bases = {0}, vseeds = {0}, firsts = {0}, sweep_ofs = {0};
   variant_def custom_defs[16];
@@ -772,6 +828,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
       case O_REPORT_FROM: report_from = optarg; break;
       case O_JOBS: if (!parse_int(optarg, "--jobs", 1, &e.jobs) || e.jobs > 64) { fprintf(stderr, "morsegs experiment: --jobs must be 1..64\n"); return 2; } break;
       case O_PLAN: plan_only = 1; break;
+      case O_REEVALUATE: e.reevaluate = 1; break;
       case O_EVAL_VIEWS: if (!parse_int(optarg, "--eval-views", 1, &e.eval_views)) return 2; break;
       case O_TOPO_RES: if (!parse_int(optarg, "--topo-res", 16, &e.topo_res) || e.topo_res > 4096) { fprintf(stderr, "morsegs experiment: --topo-res must be 16..4096\n"); return 2; } break;
       case 'h': case O_HELP: usage(stdout); return 0;
@@ -1053,7 +1110,9 @@ int mgs_cmd_experiment(int argc, char **argv) {
   for (size_t i = 0; i < np; i++) {
     char *rp = mgs_path_join(plan[i].dir, "result.json");
     exp_run r;
-    if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
+    if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK && needs_reevaluation(&e, &r) && !plan_only) {
+      /* evaluated again by do_run (which never trains it) */
+    } else if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
       exp_run *dst = push_run(&e);
       if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
     } else if (mgs_path_exists(rp)) {

@@ -207,6 +207,7 @@ mgs_status exp_run_write(const char *path, const exp_run *r, mgs_error *err) {
   add_num(o, "run_seconds", r->run_seconds);
   add_num(o, "train_cpu_seconds", r->train_cpu_seconds);
   add_num(o, "eval_cpu_seconds", r->eval_cpu_seconds);
+  if (r->evaluator[0]) cJSON_AddStringToObject(o, "evaluator", r->evaluator);
   cJSON *pts = cJSON_AddArrayToObject(o, "points");
   for (int i = 0; i < r->n_points; i++) {
     const exp_point *p = &r->pt[i];
@@ -265,6 +266,8 @@ mgs_status exp_run_read(const char *path, exp_run *r, mgs_error *err) {
   r->run_seconds = get_num(o, "run_seconds");
   r->train_cpu_seconds = get_num(o, "train_cpu_seconds");
   r->eval_cpu_seconds = get_num(o, "eval_cpu_seconds");
+  const cJSON *ev = cJSON_GetObjectItem(o, "evaluator");
+  snprintf(r->evaluator, sizeof r->evaluator, "%s", cJSON_IsString(ev) ? ev->valuestring : "");
   const cJSON *e;
   cJSON_ArrayForEach(e, pts) {
     exp_point *p = &r->pt[r->n_points++];

@@ -46,6 +46,7 @@ typedef struct exp_run {
   double run_seconds;          /* wall time of training, evaluations and measures (NAN in older records) */
   double train_cpu_seconds;    /* CPU time of the training steps (NAN in older records) */
   double eval_cpu_seconds;     /* CPU time of the evaluation points: eval, vdb and measures (NAN in older records) */
+  char evaluator[24];          /* the evaluating binary's fingerprint (hex; "" in older records): --reevaluate */
   int n_points;
   exp_point pt[EXP_MAX_POINTS];
 } exp_run;

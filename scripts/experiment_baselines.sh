@@ -31,7 +31,8 @@
 # SWEEP ("0.25,0.5,2,4"; "none"), SWEEP_SEEDS (3), SWEEP_VARIANTS, MORSEGS (a frozen binary for a run spread over days),
 # VARIANTS (the twelve above; --base, --variant-seeds, SWEEP_VARIANTS and FIRST keep the listed ones),
 # FIRST ("baseline,2dgs,mini-splatting,sugar,gaussianpro"), MGS_THREADS (1), JOBS (2: runs at a time, one core each), NICE (10), PLAN (1: print the
-# runs and the estimated time, train nothing), RECORDS (a folder kept in git: finished runs' records are restored from it
+# runs and the estimated time, train nothing), REEVALUATE (1: the finished runs are evaluated again with this binary,
+# once, after the evaluation changed; nothing is trained again), RECORDS (a folder kept in git: finished runs' records are restored from it
 # before the experiment starts and saved to it every 5 minutes and at the end, scripts/experiment_records.sh — a new
 # machine has no DIR).
 set -euo pipefail
@@ -93,4 +94,4 @@ MGS_THREADS=${MGS_THREADS:-1} $run nice -n "${NICE:-10}" "$M" experiment "${data
   --variant mini-splatting="--strategy mini-splatting" \
   --variant ms-morse-r="--strategy mini-splatting --preset morse-r" \
   --variant sugar="--preset sugar" --variant gaussianpro="--strategy gaussianpro" \
-  --variants "$V" "${extra[@]}" --jobs "${JOBS:-2}" ${PLAN:+--plan}
+  --variants "$V" "${extra[@]}" --jobs "${JOBS:-2}" ${PLAN:+--plan} ${REEVALUATE:+--reevaluate}

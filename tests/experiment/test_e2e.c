@@ -273,6 +273,48 @@ int main(void) {
   for (int k = 0; k < 7 && nc >= 19; k++)
     CHECK_MSG(!strcmp(cells[col[k]], want[k]), "%s: RESULTS.md %s, morsegs eval %s", what[k], cells[col[k]], want[k]);
   CHECK(cJSON_IsNumber(fu)); /* the fused surface is measured by every run */
+  /* --reevaluate: the finished runs another build evaluated (here: records marked so) are
+     evaluated again from their saved models, nothing is trained (the models,
+     experiment_args and train.log are untouched), the previous records are kept beside the
+     new ones; a second --reevaluate has nothing to do; a run whose folder is not this
+     command's is refused, named, and left as it was */
+  {
+    char rs[700], rkeep[700], ekeep[700], tlog[700], *old_rec = NULL, *kept = NULL, *newr = NULL;
+    snprintf(rs, sizeof rs, "%s/runs/ds/baseline/seed_1/result.json", out);
+    snprintf(rkeep, sizeof rkeep, "%s/runs/ds/baseline/seed_1/result.before-reevaluation.json", out);
+    snprintf(ekeep, sizeof ekeep, "%s/runs/ds/baseline/seed_1/eval_700.before-reevaluation.json", out);
+    snprintf(tlog, sizeof tlog, "%s/runs/ds/baseline/seed_1/train.log", out);
+    /* a run evaluated by this build is not evaluated again */
+    const double t_rec = mtime(rs);
+    CHECK(mgs_test_sh("'%s'%s --reevaluate > '%s'", cli, cmd, log2) == 0);
+    CHECK_MSG(mtime(rs) == t_rec && !mgs_path_exists(rkeep), "--reevaluate redid a run this build had evaluated");
+    CHECK(mgs_test_sh("sed -i 's/\"evaluator\":[^,]*,/\"evaluator\": \"0000000000000000\",/' '%s'", rs) == 0);
+    mgs_read_file(rs, &old_rec, &n, NULL);
+    CHECK_MSG(old_rec && strstr(old_rec, "0000000000000000"), "record without an evaluator: %s", old_rec ? old_rec : "(none)");
+    const double t_model = mtime(second_ply), t_a = mtime(second_args), t_log = mtime(tlog);
+    CHECK(mgs_test_sh("'%s'%s --reevaluate > '%s'", cli, cmd, log2) == 0);
+    CHECK_MSG(mtime(second_ply) == t_model && mtime(second_args) == t_a && mtime(tlog) == t_log,
+              "--reevaluate touched the model, its arguments or its training log");
+    mgs_read_file(rkeep, &kept, &n, NULL);
+    mgs_read_file(rs, &newr, &n, NULL);
+    CHECK_MSG(old_rec && kept && !strcmp(old_rec, kept), "the previous result.json was not kept");
+    CHECK_MSG(mgs_path_exists(ekeep), "the previous eval_700.json was not kept");
+    CHECK_MSG(newr && !strstr(newr, "0000000000000000"), "the run was not evaluated again");
+    cJSON *a = cJSON_Parse(old_rec ? old_rec : ""), *b = cJSON_Parse(newr ? newr : "");
+    const cJSON *ta = cJSON_GetObjectItem(a, "train_cpu_seconds"), *tb = cJSON_GetObjectItem(b, "train_cpu_seconds");
+    CHECK(cJSON_IsNumber(ta) && cJSON_IsNumber(tb) && ta->valuedouble == tb->valuedouble);
+    cJSON_Delete(a); cJSON_Delete(b);
+    free(old_rec); free(kept); free(newr);
+    char args0[700];
+    snprintf(args0, sizeof args0, "%s/runs/ds/baseline/seed_0/experiment_args", out);
+    CHECK(mgs_test_sh("echo --changed >> '%s' && sed -i 's/\"evaluator\":[^,]*,/\"evaluator\": \"x\",/' '%s'", args0, first) == 0);
+    mgs_test_sh("'%s'%s --reevaluate > '%s' 2>&1", cli, cmd, log2);
+    char *l3 = NULL;
+    mgs_read_file(log2, &l3, &n, NULL);
+    CHECK_MSG(l3 && strstr(l3, "seed_0: cannot evaluate again"), "log: %s", l3 ? l3 : "(none)");
+    CHECK(mgs_path_exists(first_ply) && mgs_path_exists(first));
+    free(l3);
+  }
   free(before); free(after); free(l2); free(md); free(csv); free(js); free(ev);
   return mgs_test_finish();
 }

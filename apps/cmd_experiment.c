@@ -1105,13 +1105,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
   /* finished runs first (their count sets the ETA's denominator) */
-  unsigned char *done = calloc(np + 1, 1);
+  unsigned char *done = calloc(np + 1, 1), *again = calloc(np + 1, 1); /* again: --reevaluate's */
   size_t kept = 0;
   for (size_t i = 0; i < np; i++) {
     char *rp = mgs_path_join(plan[i].dir, "result.json");
     exp_run r;
     if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK && needs_reevaluation(&e, &r) && !plan_only) {
-      /* evaluated again by do_run (which never trains it) */
+      if (again) again[i] = 1; /* evaluated again by do_run (which never trains it) */
     } else if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
       exp_run *dst = push_run(&e);
       if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
@@ -1160,8 +1160,11 @@ int mgs_cmd_experiment(int argc, char **argv) {
         if (!done[q]) left += item_estimate(&e, plan, q, px, NULL);
       char eta[32];
       fmt_duration(px ? left / (double)e.jobs : NAN, eta, sizeof eta);
-      printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
-             todo - idx + 1, eta);
+      if (again && again[i])
+        printf("[%zu/%zu] %s: evaluating its saved models again (--reevaluate) ...\n", idx, todo, label);
+      else
+        printf("[%zu/%zu] %s: training %d iterations ... (ETA for the remaining %zu runs: %s)\n", idx, todo, label, e.iters,
+               todo - idx + 1, eta);
       fflush(stdout);
       job *j = &running[n_running];
       j->pid = start_job(&e, it, &j->fd);
@@ -1245,6 +1248,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
 fail_plan:
   free(px);
   free(done);
+  free(again);
   free(plan);
 fail:
   for (size_t i = 0; i < e.n_ds; i++) exp_truth_free(&e.ds[i].truth);

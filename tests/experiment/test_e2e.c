@@ -295,6 +295,11 @@ int main(void) {
     CHECK(mgs_test_sh("'%s'%s --reevaluate > '%s'", cli, cmd, log2) == 0);
     CHECK_MSG(mtime(second_ply) == t_model && mtime(second_args) == t_a && mtime(tlog) == t_log,
               "--reevaluate touched the model, its arguments or its training log");
+    char *l4 = NULL;
+    mgs_read_file(log2, &l4, &n, NULL);
+    CHECK_MSG(l4 && strstr(l4, "seed 1: evaluating its saved models again") && !strstr(l4, "seed 0: evaluating"),
+              "log: %s", l4 ? l4 : "(none)");
+    free(l4);
     mgs_read_file(rkeep, &kept, &n, NULL);
     mgs_read_file(rs, &newr, &n, NULL);
     CHECK_MSG(old_rec && kept && !strcmp(old_rec, kept), "the previous result.json was not kept");

@@ -67,9 +67,11 @@ mgs_status mgs_vdb_tsdf_grids(const mgs_vdb_tsdf *t, mgs_vdb_grid **tsdf, mgs_vd
 /* The level set "sdf" of the fused zero crossing, valid as the α-field's (mgs_vdb.h,
  * CLOSEST: every neighbour pair within one voxel). Voxels seen by at least min_weight
  * views keep their fused value D; the unobserved inside behind the truncation is filled
- * from the observed inside through unobserved voxels only, within the observed box (a
- * closed surface's whole inside; w + 9 voxels with a warning when the fill reaches the
- * box: no global flood fill, which an open shell leaks to all of space); the field
+ * from the observed inside through unobserved voxels only, within the observed box, per
+ * connected region (a region the observed outside encloses, a closed surface's inside, is
+ * filled whole; one that reaches the box's margin, an open shell or a floater's fragment,
+ * only w + 9 voxels from its observed inside: no global flood fill, which leaks to all of
+ * space; a warning when such regions hold over a tenth of the observed inside); the field
  * 1/2 - D/(2t) (1 on the filled inside, 0 elsewhere) goes through the CLOSEST construction
  * at tau = 1/2, so the band holds distances to the fused zero crossing (and to the edge
  * of an open shell's limited fill, which then is a surface too: never a sign flip

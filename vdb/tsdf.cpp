@@ -3,6 +3,7 @@
 // (parallel over views, per-thread key lists), then every block is fused against all the
 // views of the batch (parallel over blocks: each block is written by one thread only).
 #include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <algorithm>
@@ -325,43 +326,66 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
       return mgs_error_set(err, MGS_ERR_FORMAT,
                            "tsdf: no observed voxel lies behind a depth: the fused volume has no surface");
     // The inside behind the truncation is unobserved: fill it from the observed inside
-    // through unobserved voxels only (never through observed outside), frontier by
-    // frontier, inside the box of the observed voxels. A closed fused surface gets its
-    // whole inside; an open one (unseen sides, thin parts) lets the fill reach the box's
-    // margin, and then the inside is grown only far enough to cover the band's leaves
-    // (w + 9 voxels) with a warning: no global flood fill, which leaks to all of space.
+    // through unobserved voxels only (never through observed outside), inside the box of
+    // the observed voxels. Per connected region of {unobserved or observed inside} in the
+    // box: a region the observed outside encloses (a closed fused surface) is inside
+    // whole; a region that reaches the box's margin (an open shell, unseen sides, or a
+    // fragment fused from a floater) gets only its observed inside grown by w + 9 voxels
+    // (to cover the band's leaves; no flood to the box, which would leak to all of space).
+    // Regions are separate, so one open fragment leaves a closed object's inside whole.
     CoordBBox box;
     obs.evalActiveVoxelBoundingBox(box);
     box.expand(1);
     auto inside = std::make_unique<MaskTree>(neg);
-    auto front = std::make_unique<MaskTree>(neg);
-    bool open = false;
-    for (int step = 0; front->activeVoxelCount() > 0; step++) {
-      auto next = std::make_unique<MaskTree>(*front);
-      MaskTree &nx = *next;
-      tools::dilateActiveValues(nx, 1, tools::NN_FACE, tools::IGNORE_TILES);
-      nx.topologyDifference(pos);
-      nx.topologyDifference(*inside);
-      if (!open) {
-        CoordBBox nb;
-        if (nx.evalActiveVoxelBoundingBox(nb) && (nb.min().x() <= box.min().x() || nb.min().y() <= box.min().y() || nb.min().z() <= box.min().z() ||
-                              nb.max().x() >= box.max().x() || nb.max().y() >= box.max().y() || nb.max().z() >= box.max().z()))
-          open = true;
-      }
-      if (open && step >= half_width + 9) break;
-      inside->topologyUnion(nx);
-      front = std::move(next);
-    }
-    if (open) {
-      // restart: the grown part is not trusted beyond the band's reach
-      inside = std::make_unique<MaskTree>(neg);
+    const size_t neg_total = (size_t)neg.activeVoxelCount();
+    size_t open_neg = 0, open_regions = 0;
+    const double box_voxels = (double)box.dim().x() * box.dim().y() * box.dim().z();
+    auto grow_open = [&](MaskTree &seeds, const MaskTree *within) {
       for (int k = 0; k < half_width + 9; k++) {
-        tools::dilateActiveValues(*inside, 1, tools::NN_FACE, tools::IGNORE_TILES);
-        inside->topologyDifference(pos);
+        tools::dilateActiveValues(seeds, 1, tools::NN_FACE, tools::IGNORE_TILES);
+        seeds.topologyDifference(pos);
+        if (within) seeds.topologyIntersection(*within);
       }
+      inside->topologyUnion(seeds);
+    };
+    if (box_voxels <= 1e8) {
+      BoolTree region(false);
+      region.fill(box, true, true);
+      region.topologyDifference(pos);
+      region.voxelizeActiveTiles();  // segmentActiveVoxels labels leaf voxels only: a tile would be left out
+      std::vector<BoolTree::Ptr> parts;
+      tools::segmentActiveVoxels(region, parts);
+      for (const auto &part : parts) {
+        MaskTree seeds(neg);
+        seeds.topologyIntersection(*part);
+        const size_t nn = (size_t)seeds.activeVoxelCount();
+        if (nn == 0) continue;  // a pocket of unobserved space with no observed inside: outside
+        CoordBBox pb;
+        part->evalActiveVoxelBoundingBox(pb);
+        const bool open = pb.min().x() <= box.min().x() || pb.min().y() <= box.min().y() || pb.min().z() <= box.min().z() ||
+                          pb.max().x() >= box.max().x() || pb.max().y() >= box.max().y() || pb.max().z() >= box.max().z();
+        if (!open) {
+          inside->topologyUnion(*part);
+          continue;
+        }
+        open_neg += nn;
+        open_regions++;
+        MaskTree within(false);
+        within.topologyUnion(*part);
+        grow_open(seeds, &within);
+      }
+    } else {  // a box too large to label (a scene, not an object): every region is taken as open
+      MaskTree seeds(neg);
+      grow_open(seeds, nullptr);
+      open_neg = neg_total;
+      open_regions = 1;
+    }
+    if (open_neg > neg_total / 10)
       mgs_warn("tsdf: the fused surface is not closed (its inside reaches unobserved space): the inside is filled "
                "only %d voxels deep; persistence may see a cavity", half_width + 9);
-    }
+    else if (open_regions)
+      mgs_info("tsdf: %zu open fragment(s) (%.2g %% of the observed inside) filled only %d voxels deep; the rest "
+               "is closed", open_regions, 100.0 * (double)open_neg / (double)neg_total, half_width + 9);
     // 1/2 - D/(2t) on observed voxels (> 1/2 inside), 1 on the grown inside, 0 elsewhere.
     auto field = std::make_shared<FloatTree>(0.0f);
     {

@@ -102,17 +102,9 @@ int mgs_cmd_eval(int argc, char **argv) {
         else { fprintf(stderr, "morsegs eval: --background '%s': expected white or black\n", optarg); return 2; }
         break;
       case 'C': fo.carve = 1; break;
-      case 1001: {
-        char *end;
-        long px = strtol(optarg, &end, 10);
-        if (!strcmp(optarg, "off")) px = -1, end = optarg + 3;
-        if (!*optarg || *end || px < -1 || px > 64) {
-          fprintf(stderr, "morsegs eval: --mask-carve '%s': expected a margin in pixels 0..64, or off\n", optarg);
-          return 2;
-        }
-        fo.mask_carve_px = (int)px;
+      case 1001:
+        if (!mgs_cli_mask_carve("eval", optarg, &fo.mask_carve_px)) return 2;
         break;
-      }
       case 'Z':
         if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;
         else if (!strcmp(optarg, "expected")) fo.depth = MGS_DEPTH_EXPECTED;

@@ -181,17 +181,9 @@ int mgs_cmd_vdb(int argc, char **argv) {
         break;
       case 'D': from_depth = 1; break;
       case 'C': fo.carve = 1; break;
-      case 1001: {
-        char *end;
-        long px = strtol(optarg, &end, 10);
-        if (!strcmp(optarg, "off")) px = -1, end = optarg + 3;
-        if (!*optarg || *end || px < -1 || px > 64) {
-          fprintf(stderr, "morsegs vdb: --mask-carve '%s': expected a margin in pixels 0..64, or off\n", optarg);
-          return 2;
-        }
-        fo.mask_carve_px = (int)px;
+      case 1001:
+        if (!mgs_cli_mask_carve("vdb", optarg, &fo.mask_carve_px)) return 2;
         break;
-      }
       case 'A': from_alpha = 1; break;
       case 'N': no_alpha = 1; break;
       case 'j':

@@ -1,5 +1,6 @@
 /* morsegs: dispatch to the subcommand named by argv[1]. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include "apps/mgs_cli.h"
 #include "core/mgs_log.h"
@@ -29,6 +30,18 @@ static void usage(FILE *f) {
 
 int mgs_cli_fail(const char *cmd, const mgs_error *err) {
   fprintf(stderr, "morsegs %s: %s\n", cmd, err && err->msg[0] ? err->msg : "failed");
+  return 1;
+}
+
+int mgs_cli_mask_carve(const char *cmd, const char *arg, int *px) {
+  char *end;
+  long v = strtol(arg, &end, 10);
+  if (!strcmp(arg, "off")) v = -1, end = (char *)arg + 3;
+  if (!*arg || *end || v < -1 || v > 64) {
+    fprintf(stderr, "morsegs %s: --mask-carve '%s': expected a margin in pixels 0..64, or off\n", cmd, arg);
+    return 0;
+  }
+  *px = (int)v;
   return 1;
 }
 

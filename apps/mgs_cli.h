@@ -37,4 +37,7 @@ int mgs_cmd_train_mpi(mgs_train_config *c, const char *data);
 
 /* Prints "morsegs <cmd>: <message>" to stderr and returns 1 (for `return mgs_cli_fail(...)`). */
 int mgs_cli_fail(const char *cmd, const mgs_error *err);
+/* --mask-carve PX|off (measure/mgs_depth_fusion.h's mask_carve_px, off = -1) into *px;
+ * 0 after printing the usage error naming the command and the value. */
+int mgs_cli_mask_carve(const char *cmd, const char *arg, int *px);
 #endif

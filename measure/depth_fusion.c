@@ -216,6 +216,15 @@ mgs_status mgs_fuse_depth(const mgs_depth_source *src, size_t n, const mgs_camer
   mgs_vdb_tsdf *t = NULL;
   mgs_status st = MGS_OK;
   if (!depth || !alpha || !fp || (masks && !far)) { st = mgs_error_set(err, MGS_ERR_NOMEM, "depth fusion: out of memory"); goto done; }
+  if (masks) { /* a mask of another size (images read at another downscale than the cameras') is not used: said */
+    size_t misfit = 0, first = 0;
+    for (size_t k = 0; k < n; k++)
+      if (masks[k] && !mask_fits(masks[k], &cams[k]) && !misfit++) first = k;
+    if (misfit)
+      mgs_warn("depth fusion: %zu image mask(s) not used: their size differs from their camera's (view %zu: %dx%d "
+               "image, %dx%d camera; were the images read at the cameras' downscale?)", misfit, first,
+               masks[first]->width, masks[first]->height, cams[first].width, cams[first].height);
+  }
   /* pass 1: the footprint (median over views of the median foreground depth / focal) */
   size_t nfp = 0, fg_sum = 0;
   for (size_t k = 0; k < n; k++) {

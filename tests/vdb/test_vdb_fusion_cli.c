@@ -331,6 +331,17 @@ static void test_image_masks(void) {
   mesh_fit ft = fit_mesh(path, gt, floater);
   fprintf(stderr, "the test views alone: %zu of %zu points of the shape covered\n", ft.covered, ft.gt_n);
   CHECK_MSG(ft.covered >= 0.95 * ft.gt_n, "the test views were masked by other images of the same name");
+  /* cameras at another size than the images (a model imported at another downscale): the
+     masks are not used, and that is said */
+  snprintf(cmd, sizeof cmd,
+           "/usr/bin/python3 -c \"import json; c=json.load(open('%s/rt/cameras.json'))\n"
+           "for x in c: x['width']//=2; x['height']//=2; x['fx']/=2; x['fy']/=2\n"
+           "json.dump(c, open('%s/rt/cameras.json','w'))\"", dir, dir);
+  CHECK(mgs_test_sh("%s", cmd) == 0);
+  snprintf(cmd, sizeof cmd, "%s vdb %s/rt -o %s/h.vdb --no-alpha", cli(), dir, dir);
+  CHECK(vt_run(cmd, e, sizeof e) == 0);
+  CHECK_MSG(strstr(e, "8 image mask(s) not used: their size differs") && strstr(e, "64x64 image, 32x32 camera"),
+            "no warning about masks of another size");
   /* a bad margin is refused, naming the option */
   snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/x.vdb --mask-carve 2px", cli(), run, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 2 && strstr(e, "--mask-carve '2px'"));

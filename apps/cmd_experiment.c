@@ -12,8 +12,8 @@
  * exit code, its reason through a pipe, its record through RUN/result.json. DIR/.lock (flock) refuses a second experiment on the same DIR.
  *
  * Resume: a run is finished when RUN/result.json exists (written atomically, last);
- * running again on the same DIR keeps finished runs and redoes unfinished ones from the
- * start (an interrupted run's wall time would not be comparable). --reevaluate evaluates
+ * running again on the same DIR keeps finished runs and continues an interrupted one from
+ * its last checkpoint when its folder was made by the same command (else starts it again). --reevaluate evaluates
  * the finished runs another build evaluated (result.json's evaluator: a fingerprint of the
  * binary) again from their saved models: never trained again, refused for a folder that is
  * not this command's, previous records kept.

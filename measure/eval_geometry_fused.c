@@ -69,6 +69,8 @@ int mgs_eval_geometry_fused(const char *run_dir, const mgs_fusion_opts *opts, co
     cJSON_AddNumberToObject(obj, "truncation_thin_footprints", rep.truncation_thin / rep.footprint);
     cJSON_AddNumberToObject(obj, "thin_voxels", (double)rep.thin_voxels);
     cJSON_AddNumberToObject(obj, "min_weight", fo.min_weight);
+    cJSON_AddNumberToObject(obj, "image_masks", (double)rep.image_masks); /* views masked by their dataset image */
+    cJSON_AddNumberToObject(obj, "mask_carve_px", fo.mask_carve_px);     /* -1: off */
     cJSON_AddNumberToObject(obj, "surface_triangles", (double)surf->nt);
     cJSON_AddNumberToObject(obj, "surface_pieces", (double)pieces);
     cJSON_AddNumberToObject(obj, "surface_euler", (double)chi);

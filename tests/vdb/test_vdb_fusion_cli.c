@@ -294,6 +294,9 @@ static void test_image_masks(void) {
   snprintf(cmd, sizeof cmd, "%s eval %s --data %s -o %s --no-images --fused-only", cli(), model, data, run);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   CHECK(mgs_test_sh("grep -c '\"img_name\":.*\"r_0\"' %s/cameras.json | grep -qx 2", run) == 0);
+  /* the evaluation records how it fused: every view masked by its image, the carving margin */
+  CHECK(mgs_test_sh("grep -q '\"image_masks\":.32,' %s/results.json && grep -q '\"mask_carve_px\":.4,' %s/results.json",
+                    run, run) == 0);
 
   const char *mode[2] = {"", "--mask-carve off"};
   mesh_fit fit[2];

@@ -1115,6 +1115,7 @@ int mgs_cmd_experiment(int argc, char **argv) {
     } else if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
       exp_run *dst = push_run(&e);
       if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
+      if (again && plan_only && needs_reevaluation(&e, &r)) again[i] = 1; /* counted for --plan */
     } else if (mgs_path_exists(rp)) {
       fprintf(stderr, "morsegs experiment: note: %s: %s; the run is redone\n", rp, err.msg);
     }
@@ -1122,6 +1123,20 @@ int mgs_cmd_experiment(int argc, char **argv) {
   }
   if (plan_only) {
     print_plan(&e, plan, np, done);
+    if (e.reevaluate) {
+      size_t na = 0;
+      double cpu = 0;
+      for (size_t i = 0; i < np; i++)
+        if (again && again[i]) {
+          na++;
+          for (size_t k = 0; k < e.n_runs; k++)
+            if (!strcmp(e.runs[k].dataset, e.ds[plan[i].ds].name) && !strcmp(e.runs[k].variant, e.vars[plan[i].var].def->name) &&
+                e.runs[k].seed == plan[i].seed && e.runs[k].factor == plan[i].factor && isfinite(e.runs[k].eval_cpu_seconds))
+              cpu += e.runs[k].eval_cpu_seconds;
+        }
+      printf("--reevaluate: %zu finished run(s) another build evaluated are evaluated again (their last evaluations "
+             "took %.0f CPU s)\n", na, cpu);
+    }
     rc = 0;
     goto fail_plan;
   }

@@ -291,6 +291,12 @@ int main(void) {
     CHECK(mgs_test_sh("sed -i 's/\"evaluator\":[^,]*,/\"evaluator\": \"0000000000000000\",/' '%s'", rs) == 0);
     mgs_read_file(rs, &old_rec, &n, NULL);
     CHECK_MSG(old_rec && strstr(old_rec, "0000000000000000"), "record without an evaluator: %s", old_rec ? old_rec : "(none)");
+    /* --plan counts it */
+    CHECK(mgs_test_sh("'%s'%s --reevaluate --plan > '%s'", cli, cmd, log2) == 0);
+    char *lp = NULL;
+    mgs_read_file(log2, &lp, &n, NULL);
+    CHECK_MSG(lp && strstr(lp, "--reevaluate: 1 finished run(s) another build evaluated"), "plan: %s", lp ? lp : "(none)");
+    free(lp);
     const double t_model = mtime(second_ply), t_a = mtime(second_args), t_log = mtime(tlog);
     CHECK(mgs_test_sh("'%s'%s --reevaluate > '%s'", cli, cmd, log2) == 0);
     CHECK_MSG(mtime(second_ply) == t_model && mtime(second_args) == t_a && mtime(tlog) == t_log,

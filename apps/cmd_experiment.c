@@ -1110,13 +1110,13 @@ int mgs_cmd_experiment(int argc, char **argv) {
   for (size_t i = 0; i < np; i++) {
     char *rp = mgs_path_join(plan[i].dir, "result.json");
     exp_run r;
-    if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK && needs_reevaluation(&e, &r) && !plan_only) {
-      if (again) again[i] = 1; /* evaluated again by do_run (which never trains it) */
-    } else if (mgs_path_exists(rp) && exp_run_read(rp, &r, &err) == MGS_OK) {
+    const int exists = mgs_path_exists(rp), readable = exists && exp_run_read(rp, &r, &err) == MGS_OK;
+    /* --reevaluate: evaluated again by do_run (which never trains it); --plan only counts it */
+    if (readable && again && needs_reevaluation(&e, &r)) again[i] = 1;
+    if (readable && !(again && again[i] && !plan_only)) {
       exp_run *dst = push_run(&e);
       if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
-      if (again && plan_only && needs_reevaluation(&e, &r)) again[i] = 1; /* counted for --plan */
-    } else if (mgs_path_exists(rp)) {
+    } else if (exists && !readable) {
       fprintf(stderr, "morsegs experiment: note: %s: %s; the run is redone\n", rp, err.msg);
     }
     free(rp);

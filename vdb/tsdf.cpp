@@ -340,7 +340,7 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
     const size_t neg_total = (size_t)neg.activeVoxelCount();
     size_t open_neg = 0, open_regions = 0;
     const double box_voxels = (double)box.dim().x() * box.dim().y() * box.dim().z();
-    auto grow_open = [&](MaskTree &seeds, const MaskTree *within) {
+    auto grow_open = [&](MaskTree &seeds, const BoolTree *within) {
       for (int k = 0; k < half_width + 9; k++) {
         tools::dilateActiveValues(seeds, 1, tools::NN_FACE, tools::IGNORE_TILES);
         seeds.topologyDifference(pos);
@@ -370,9 +370,7 @@ extern "C" mgs_status mgs_vdb_tsdf_to_sdf(const mgs_vdb_tsdf *t, int half_width,
         }
         open_neg += nn;
         open_regions++;
-        MaskTree within(false);
-        within.topologyUnion(*part);
-        grow_open(seeds, &within);
+        grow_open(seeds, part.get());
       }
     } else {  // a box too large to label (a scene, not an object): every region is taken as open
       MaskTree seeds(neg);

@@ -121,7 +121,8 @@ static void usage(FILE *f) {
     "      --plan             print the runs, how many are finished and the estimated time; train nothing\n"
     "      --reevaluate       the finished runs another build evaluated are evaluated again by this one (their\n"
     "                         saved models, never trained again; after the evaluation changed; resumable):\n"
-    "                         the previous result.json and eval_N.json are kept as *.before-reevaluation.json\n"
+    "                         the previous result.json and eval_N.json are kept as *.before-reevaluation.json;\n"
+    "                         runs with no saved model here (records restored from git) keep their records\n"
     "  Environment: MGS_THREADS=N limits the worker threads of the harness and its children.\n"
     "  Variants whose flags `morsegs train` rejects are reported as not available.\n");
 }
@@ -298,6 +299,17 @@ static void binary_fingerprint(char out[24]) {
     for (size_t i = 0; i < n; i++) h = (h ^ buf[i]) * 1099511628211ull;
   if (f) fclose(f);
   snprintf(out, 24, "%016llx", (unsigned long long)h);
+}
+
+/* The run's final model and train_stats.json, which --reevaluate needs (records restored
+ * from git have neither). */
+static int has_saved_model(const char *dir, int iters) {
+  char *stats = mgs_path_join(dir, "train_stats.json"), rel[64];
+  snprintf(rel, sizeof rel, "point_cloud/iteration_%d/point_cloud.ply", iters);
+  char *ply = mgs_path_join(dir, rel);
+  const int ok = stats && ply && mgs_path_exists(stats) && mgs_path_exists(ply) && isfinite(mgs_run_saved_seconds(dir, iters));
+  free(stats); free(ply);
+  return ok;
 }
 
 /* --reevaluate: a finished run whose record another binary wrote. */
@@ -1106,13 +1118,18 @@ int mgs_cmd_experiment(int argc, char **argv) {
   sigaction(SIGTERM, &sa, &old_term);
   /* finished runs first (their count sets the ETA's denominator) */
   unsigned char *done = calloc(np + 1, 1), *again = calloc(np + 1, 1); /* again: --reevaluate's */
-  size_t kept = 0;
+  size_t kept = 0, kept_no_model = 0;
   for (size_t i = 0; i < np; i++) {
     char *rp = mgs_path_join(plan[i].dir, "result.json");
     exp_run r;
     const int exists = mgs_path_exists(rp), readable = exists && exp_run_read(rp, &r, &err) == MGS_OK;
     /* --reevaluate: evaluated again by do_run (which never trains it); --plan only counts it */
-    if (readable && again && needs_reevaluation(&e, &r)) again[i] = 1;
+    if (readable && again && needs_reevaluation(&e, &r)) {
+      /* records restored on another machine (experiment_records.sh) have no model to evaluate:
+         kept as they are, and the report says which builds evaluated what */
+      if (has_saved_model(plan[i].dir, e.iters)) again[i] = 1;
+      else kept_no_model++;
+    }
     if (readable && !(again && again[i] && !plan_only)) {
       exp_run *dst = push_run(&e);
       if (dst) { *dst = r; done[i] = 1; kept++; snprintf(e.vars[plan[i].var].status.status, 16, "available"); }
@@ -1121,6 +1138,9 @@ int mgs_cmd_experiment(int argc, char **argv) {
     }
     free(rp);
   }
+  if (kept_no_model)
+    printf("--reevaluate: %zu finished run(s) another build evaluated have no saved model here (their records were restored "
+           "or their models removed): their records are kept as that build wrote them\n", kept_no_model);
   if (plan_only) {
     print_plan(&e, plan, np, done);
     if (e.reevaluate) {

@@ -592,6 +592,30 @@ static void write_previous_comparison(FILE *f, const exp_report_in *in, const ex
   }
   cJSON_Delete(prev);
 }
+/* Which builds evaluated the finished runs (result.json's evaluator): a report mixing them says
+ * so, since the depth fusion and other measurements changed between builds (--reevaluate). */
+static void write_evaluators(FILE *f, cJSON *root, const exp_report_in *in) {
+  const char *names[64];
+  size_t counts[64], n = 0;
+  for (size_t i = 0; i < in->n_runs; i++) {
+    const char *ev = in->runs[i].evaluator[0] ? in->runs[i].evaluator : "(not recorded)";
+    size_t k = 0;
+    while (k < n && strcmp(names[k], ev)) k++;
+    if (k == n) {
+      if (n == 64) continue;
+      names[n] = ev, counts[n++] = 0;
+    }
+    counts[k]++;
+  }
+  cJSON *o = cJSON_AddObjectToObject(root, "evaluators");
+  for (size_t k = 0; k < n; k++) cJSON_AddNumberToObject(o, names[k], (double)counts[k]);
+  if (n < 2) return;
+  fprintf(f, "The finished runs were evaluated by %zu builds (fingerprint: runs):", n);
+  for (size_t k = 0; k < n; k++) fprintf(f, "%s %s: %zu", k ? "," : "", names[k], counts[k]);
+  fprintf(f, "; measurements that changed between them (e.g. the depth fusion) are not comparable across builds: "
+             "`morsegs experiment --reevaluate` evaluates runs whose saved models are here again with one build.  \n");
+}
+
 
 mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
   const size_t n_cells = in->n_datasets * in->n_variants * N_HYPS;
@@ -635,7 +659,9 @@ mgs_status exp_report_write(const exp_report_in *in, mgs_error *err) {
   fprintf(f, "Written %s by morsegs 0.1.0: %zu of %zu planned runs finished; %d iterations per run; %d seed(s).  \n", date,
           in->n_runs, in->planned_runs, in->iters, in->seeds);
   fprintf(f, "Load average (1 min) when the experiment started: %.2f; wall times are taken under whatever load the machine "
-             "had (2 cores shared).\n\n", in->load_start);
+             "had (2 cores shared).  \n", in->load_start);
+  write_evaluators(f, root, in);
+  fprintf(f, "\n");
   fprintf(f, "## Variants\n\n| variant | measured against | status | note |\n|---|---|---|---|\n");
   cJSON *jv = cJSON_AddArrayToObject(root, "variants");
   for (size_t v = 0; v < in->n_variants; v++) {

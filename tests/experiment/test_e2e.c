@@ -316,6 +316,29 @@ int main(void) {
     CHECK(cJSON_IsNumber(ta) && cJSON_IsNumber(tb) && ta->valuedouble == tb->valuedouble);
     cJSON_Delete(a); cJSON_Delete(b);
     free(old_rec); free(kept); free(newr);
+    /* records restored on a new machine (no model, no train_stats.json): --reevaluate keeps
+       them as they are and says so; the report names the two builds that evaluated the runs */
+    {
+      char mdp[700], pc[700], pc_away[700], *md2 = NULL, *l5 = NULL, *before_rec = NULL, *after_rec = NULL;
+      snprintf(mdp, sizeof mdp, "%s/RESULTS.md", out);
+      snprintf(pc, sizeof pc, "%s/runs/ds/baseline/seed_1/point_cloud", out);
+      snprintf(pc_away, sizeof pc_away, "%s/runs/ds/baseline/seed_1/point_cloud.away", out);
+      CHECK(mgs_test_sh("sed -i 's/\"evaluator\":[^,]*,/\"evaluator\": \"1111111111111111\",/' '%s'", rs) == 0);
+      CHECK(rename(pc, pc_away) == 0);
+      mgs_read_file(rs, &before_rec, &n, NULL);
+      CHECK(mgs_test_sh("'%s'%s --reevaluate > '%s' 2>&1", cli, cmd, log2) == 0);
+      mgs_read_file(log2, &l5, &n, NULL);
+      mgs_read_file(rs, &after_rec, &n, NULL);
+      CHECK_MSG(l5 && strstr(l5, "--reevaluate: 1 finished run(s) another build evaluated have no saved model here") &&
+                    !strstr(l5, "evaluating its saved models again") && !strstr(l5, "cannot evaluate again"),
+                "log: %s", l5 ? l5 : "(none)");
+      CHECK_MSG(before_rec && after_rec && !strcmp(before_rec, after_rec), "a record without its model was changed");
+      mgs_read_file(mdp, &md2, &n, NULL);
+      CHECK_MSG(md2 && strstr(md2, "evaluated by 2 builds") && strstr(md2, "1111111111111111: 1"),
+                "RESULTS.md does not name the builds: %.300s", md2 ? md2 : "(none)");
+      CHECK(rename(pc_away, pc) == 0);
+      free(md2); free(l5); free(before_rec); free(after_rec);
+    }
     char args0[700];
     snprintf(args0, sizeof args0, "%s/runs/ds/baseline/seed_0/experiment_args", out);
     CHECK(mgs_test_sh("echo --changed >> '%s' && sed -i 's/\"evaluator\":[^,]*,/\"evaluator\": \"x\",/' '%s'", args0, first) == 0);

@@ -303,12 +303,19 @@ static void binary_fingerprint(char out[24]) {
 
 /* The run's final model and train_stats.json, which --reevaluate needs (records restored
  * from git have neither). */
+static int run_trained(const char *dir, int iters) {
+  char *stats = mgs_path_join(dir, "train_stats.json");
+  const int ok = stats && isfinite(mgs_run_saved_seconds(dir, iters)) && mgs_path_exists(stats);
+  free(stats);
+  return ok;
+}
+
 static int has_saved_model(const char *dir, int iters) {
-  char *stats = mgs_path_join(dir, "train_stats.json"), rel[64];
+  char rel[64];
   snprintf(rel, sizeof rel, "point_cloud/iteration_%d/point_cloud.ply", iters);
   char *ply = mgs_path_join(dir, rel);
-  const int ok = stats && ply && mgs_path_exists(stats) && mgs_path_exists(ply) && isfinite(mgs_run_saved_seconds(dir, iters));
-  free(stats); free(ply);
+  const int ok = ply && mgs_path_exists(ply) && run_trained(dir, iters);
+  free(ply);
   return ok;
 }
 
@@ -429,10 +436,8 @@ static int do_run(experiment *e, const plan_item *it, exp_run *out, char *reason
     char *text = NULL;
     size_t n = 0;
     if (mgs_is_dir(it->dir) && mgs_read_file(sigp, &text, &n, NULL) == MGS_OK && n == strlen(sig) && !memcmp(text, sig, n)) {
-      char *stats = mgs_path_join(it->dir, "train_stats.json");
-      trained = isfinite(mgs_run_saved_seconds(it->dir, e->iters)) && mgs_path_exists(stats);
+      trained = run_trained(it->dir, e->iters);
       resume = !trained && mgs_path_exists(ckpt);
-      free(stats);
     }
     free(text);
   }

@@ -37,6 +37,7 @@ static void usage(FILE *f) {
     "      --mask-carve PX|off\n"
     "                         the depth fusion's settings (as morsegs vdb: footprints of the views)\n"
     "      --fused-only       geometry of the depth-fused surface only (not the alpha-field's)\n"
+    "      --no-geometry      image metrics only (as the reference's metrics.py): no surfaces, no Chamfer\n"
     "  With RUN/mesh/sugar.ply (morsegs vdb RUN --sugar-mesh) its geometry is reported too (geometry.sugar).\n");
 }
 
@@ -67,10 +68,10 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'}, {"mask-carve", required_argument, 0, 1001},
                                        {"data", required_argument, 0, 'D'}, {"output", required_argument, 0, 'o'},
                                        {"background", required_argument, 0, 'G'}, {"downscale", required_argument, 0, 'R'},
-                                       {0, 0, 0, 0}};
+                                       {"no-geometry", no_argument, 0, 1002}, {0, 0, 0, 0}};
   const char *split_s = "test", *mesh = NULL, *data = NULL, *out = NULL;
   int white = -1, downscale = 0;
-  int iteration = -1, images = 1, max_views = 0, c, fused_only = 0;
+  int iteration = -1, images = 1, max_views = 0, c, fused_only = 0, geometry = 1;
   mgs_fusion_opts fo;
   mgs_fusion_opts_default(&fo);
   optind = 1;
@@ -87,6 +88,7 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'm': mesh = optarg; break;
       case 'n': images = 0; break;
       case 'F': fused_only = 1; break;
+      case 1002: geometry = 0; break;
       case 'D': data = optarg; break;
       case 'o': out = optarg; break;
       case 'R': {
@@ -121,6 +123,10 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'h': usage(stdout); return 0;
       default: usage(stderr); return 2;
     }
+  }
+  if (!geometry && (mesh || fused_only)) {
+    fprintf(stderr, "morsegs eval: --no-geometry contradicts --%s\n", mesh ? "mesh" : "fused-only");
+    return 2;
   }
   if (optind != argc - 1) { fprintf(stderr, "morsegs eval: exactly one RUN folder (or MODEL with --data) is expected\n"); usage(stderr); return 2; }
   if (!data != !out || ((white >= 0 || downscale) && !data)) {
@@ -222,7 +228,7 @@ int mgs_cmd_eval(int argc, char **argv) {
   cJSON_AddItemToObject(res, "per_view", per);
 
   /* geometry against a ground-truth mesh, if there is one and the hook is linked */
-  const char *gt_mesh = mesh ? mesh : ds->mesh_path;
+  const char *gt_mesh = !geometry ? NULL : mesh ? mesh : ds->mesh_path;
   char table[4096] = "";
   if (gt_mesh) {
     char sub[96];

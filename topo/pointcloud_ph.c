@@ -147,6 +147,80 @@ static int32_t uf_find(int32_t *par, int32_t x) {
   return x;
 }
 
+/* H1 of a complex without tetrahedra (Rips up to dimension 2) by the reduction of the
+ * coboundary matrix (de Silva, Morozov & Vejdemo-Johansson 2011; Ripser's choice): columns
+ * are the edges from the last to the first, each column the ascending ranks of the
+ * triangles that contain the edge, its pivot the first of them. It gives the same pairs as
+ * the boundary reduction of the triangles, and the edges that killed an H0 class are never
+ * columns (clearing), so only the edges that create an H1 class are reduced — on Rips
+ * complexes this avoids the fill-in of reducing every triangle (LPVI's neighbourhoods of
+ * random points: 65 % of a run in that reduction). The bars are pushed in the boundary
+ * reduction's order (by killing triangle, then the essential ones by edge), so the diagram
+ * is the same array. ev/elen: edges in filtration order; epos[r]: edge r closed a cycle;
+ * tri: 3 ascending edge ranks per triangle, triangles in filtration order. */
+static mgs_status h1_by_cohomology(const int32_t *ev, const double *elen, size_t ne, const uint8_t *epos,
+                                   const int32_t *tri, size_t nt, const int32_t *vid, mgs_topo_bars *out, mgs_error *err) {
+  mgs_status st = MGS_OK;
+  size_t *start = calloc(ne + 1, sizeof *start);
+  int32_t *cob = malloc((nt ? 3 * nt : 1) * sizeof *cob), *killer = malloc((nt ? nt : 1) * sizeof *killer);
+  uint8_t *alive = calloc(ne ? ne : 1, 1); /* edge r's class never dies */
+  colstore tcs = {calloc(nt ? nt : 1, sizeof(int32_t *)), calloc(nt ? nt : 1, sizeof(int32_t))};
+  size_t bufcap = 64, tmpcap = 64;
+  int32_t *buf = malloc(bufcap * sizeof *buf), *tmp = malloc(tmpcap * sizeof *tmp);
+  int nomem = 0;
+  if (!start || !cob || !killer || !alive || !tcs.col || !tcs.len || !buf || !tmp) goto oom;
+  /* cofacets of each edge, ascending (the triangles are visited in rank order) */
+  for (size_t t = 0; t < nt; t++)
+    for (int k = 0; k < 3; k++) start[tri[3 * t + k] + 1]++;
+  for (size_t r = 0; r < ne; r++) start[r + 1] += start[r];
+  {
+    size_t *fill = malloc((ne ? ne : 1) * sizeof *fill);
+    if (!fill) goto oom;
+    memcpy(fill, start, ne * sizeof *fill);
+    for (size_t t = 0; t < nt; t++)
+      for (int k = 0; k < 3; k++) cob[fill[tri[3 * t + k]]++] = (int32_t)t;
+    free(fill);
+  }
+  for (size_t t = 0; t < nt; t++) killer[t] = -1;
+  for (size_t r = ne; r-- > 0;) {
+    if (!epos[r]) continue; /* killed an H0 class: a pivot of the dimension below */
+    size_t len = start[r + 1] - start[r];
+    if (len > bufcap) {
+      int32_t *nb = realloc(buf, 2 * len * sizeof *nb);
+      if (!nb) goto oom;
+      buf = nb; bufcap = 2 * len;
+    }
+    /* in reversed ranks nt - 1 - t, ascending, so that reduce()'s pivot (the last entry) is
+       the first cofacet; the store is indexed by reversed rank too */
+    for (size_t k = 0; k < len; k++) buf[k] = (int32_t)(nt - 1) - cob[start[r + 1] - 1 - k];
+    int32_t piv = reduce(&tcs, &buf, &bufcap, &tmp, &tmpcap, &len, &nomem);
+    if (nomem) goto oom;
+    if (len == 0) { alive[r] = 1; continue; }
+    tcs.col[piv] = malloc(len * sizeof(int32_t));
+    if (!tcs.col[piv]) goto oom;
+    memcpy(tcs.col[piv], buf, len * sizeof(int32_t));
+    tcs.len[piv] = (int32_t)len;
+    killer[(int32_t)(nt - 1) - piv] = (int32_t)r;
+  }
+#define VID(x) (vid ? vid[x] : (x))
+  for (size_t t = 0; t < nt; t++) {
+    int32_t b = killer[t], d = tri[3 * t + 2];
+    if (b >= 0 && elen[d] > elen[b] &&
+        !bars_push(out, 1, elen[b], elen[d], VID(ev[2 * b]), VID(ev[2 * b + 1]), VID(ev[2 * d]), VID(ev[2 * d + 1])))
+      goto oom;
+  }
+  for (size_t r = 0; r < ne; r++)
+    if (alive[r] && !bars_push(out, 1, elen[r], INFINITY, VID(ev[2 * r]), VID(ev[2 * r + 1]), -1, -1)) goto oom;
+#undef VID
+  goto done;
+oom:
+  st = mgs_error_set(err, MGS_ERR_NOMEM, "persistence: out of memory (%zu edges, %zu triangles)", ne, nt);
+done:
+  if (tcs.col) for (size_t t = 0; t < nt; t++) free(tcs.col[t]);
+  free(tcs.col); free(tcs.len); free(start); free(cob); free(killer); free(alive); free(buf); free(tmp);
+  return st;
+}
+
 /* Persistence of the complex: edges (ev, ne) unsorted; triangles as vertex triples;
  * tetrahedra as vertex quads. want_h2: compute H2 (needs every tetrahedron). */
 static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t *edges, size_t ne,
@@ -208,7 +282,21 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
     sort3(rr);
     tk[ntv++] = (skey){(double)rr[2], rr[1], rr[0], 0, t};
   }
-  qsort(tk, ntv, sizeof *tk, cmp_key);
+  {
+    /* by the longest edge's rank first (a counting sort), then each group by cmp_key: the
+       order of one qsort of all of them, without its cost on 10^5-10^6 Rips triangles */
+    size_t *at = calloc(ne + 1, sizeof *at);
+    skey *sorted = malloc((ntv ? ntv : 1) * sizeof *sorted);
+    if (!at || !sorted) { free(at); free(sorted); goto oom; }
+    for (size_t t = 0; t < ntv; t++) at[(size_t)tk[t].v + 1]++;
+    for (size_t r = 0; r < ne; r++) at[r + 1] += at[r];
+    for (size_t t = 0; t < ntv; t++) sorted[at[(size_t)tk[t].v]++] = tk[t];
+    for (size_t r = 0, b = 0; r < ne; b = at[r++])
+      if (at[r] - b > 1) qsort(sorted + b, at[r] - b, sizeof *sorted, cmp_key);
+    free(at);
+    free(tk);
+    tk = sorted;
+  }
   for (size_t r = 0; r < ntv; r++) { tri[3 * r] = (int32_t)tk[r].b; tri[3 * r + 1] = (int32_t)tk[r].a; tri[3 * r + 2] = (int32_t)tk[r].v; }
   tri_cleared = calloc(ntv ? ntv : 1, 1);
   if (!tri_cleared) goto oom;
@@ -273,6 +361,10 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
     }
   }
 
+  if (!nq) {
+    st = h1_by_cohomology(ev, elen, ne, epos, tri, ntv, vid, out, err);
+    goto done;
+  }
   /* triangles: H1 pairs (edge creates, triangle kills) */
   ecs.col = calloc(ne ? ne : 1, sizeof *ecs.col);
   ecs.len = calloc(ne ? ne : 1, sizeof *ecs.len);

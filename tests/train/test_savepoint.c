@@ -16,21 +16,26 @@
 
 static const char *cli;
 
-/* PSNR on the training views of RUN's model saved at `it`. */
-static double eval_train(const char *run, int it) {
-  if (mgs_test_sh("%s eval %s --iteration %d --split train --no-images > /dev/null", cli, run, it) != 0) return -1;
+/* PSNR on the training views of RUN's model saved at `it` (image metrics only unless
+ * `geometry`); *has_geometry: results.json holds geometry figures. */
+static double eval_train_geo(const char *run, int it, int geometry, int *has_geometry) {
+  if (mgs_test_sh("%s eval %s --iteration %d --split train --no-images %s > /dev/null", cli, run, it,
+                  geometry ? "" : "--no-geometry") != 0)
+    return -1;
   char path[4096], *text = NULL, key[64];
   size_t n;
   snprintf(path, sizeof path, "%s/results.json", run);
   if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
   cJSON *j = cJSON_Parse(text);
   snprintf(key, sizeof key, "ours_%d", it);
-  cJSON *p = cJSON_GetObjectItem(cJSON_GetObjectItem(j, key), "PSNR");
+  cJSON *r = cJSON_GetObjectItem(j, key), *p = cJSON_GetObjectItem(r, "PSNR");
   double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
+  if (has_geometry) *has_geometry = cJSON_GetObjectItem(r, "geometry") != NULL;
   cJSON_Delete(j);
   free(text);
   return v;
 }
+static double eval_train(const char *run, int it) { return eval_train_geo(run, it, 0, NULL); }
 
 /* A torus (R = 1, r = 0.4) as an OFF mesh: a shape this project's built-ins do not make. */
 static int write_torus_off(const char *path) {
@@ -68,6 +73,13 @@ static void check_scene(const char *tmp, const char *name, const char *scene_arg
     CHECK(before > 20.0); /* a trained model, not a transparent one */
     CHECK(fabs(after - before) <= 0.1);
   }
+  /* the evaluations above were image metrics only (--no-geometry): the same PSNR as a full
+     evaluation, which adds the surfaces' figures; --no-geometry with --mesh is refused */
+  int geo_full = 0, geo_none = 1;
+  double full = eval_train_geo(run, 600, 1, &geo_full), none = eval_train_geo(run, 600, 0, &geo_none);
+  CHECK_MSG(full > 20.0 && full == none, "PSNR %.6f with geometry, %.6f without", full, none);
+  CHECK_MSG(geo_full && !geo_none, "geometry in results.json: %d with, %d with --no-geometry", geo_full, geo_none);
+  CHECK(mgs_test_sh("%s eval %s --no-geometry --mesh %s/gt_mesh.ply 2> /dev/null", cli, run, data) == 2);
 }
 
 int main(void) {

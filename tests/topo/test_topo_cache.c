@@ -16,7 +16,7 @@
 static mgs_vdb_grid *sdf_of(const mgs_gaussians *g) {
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
-  ap.voxel_size = 0.015;
+  ap.voxel_size = 0.02;
   mgs_vdb_sdf_params sp;
   mgs_vdb_sdf_params_default(&sp);
   sp.half_width = 4;
@@ -48,7 +48,7 @@ static void run(mgs_topo_construction cons) {
   mgs_topo_opts o;
   mgs_topo_opts_default(&o);
   o.construction = cons;
-  o.half_width = 4 * 0.015;
+  o.half_width = 4 * 0.02;
   mgs_error err;
   mgs_diagram *d0 = NULL, *d0c = NULL, *d1 = NULL, *d1c = NULL, *again = NULL;
   mgs_topo_stats st;
@@ -69,7 +69,7 @@ static void run(mgs_topo_construction cons) {
   /* another clamp: nothing reused, still right */
   mgs_diagram_destroy(again);
   again = NULL;
-  o.half_width = 3 * 0.015;
+  o.half_width = 3 * 0.02;
   mgs_diagram *d1w = NULL;
   o.cache = NULL;
   CHECK_OK(mgs_topo_persistence_vdb(s1, &o, &d1w, &err), &err);

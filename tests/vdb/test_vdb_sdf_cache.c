@@ -50,7 +50,7 @@ static void run(mgs_vdb_sdf_method method) {
   mgs_gaussians *g = vt_random_gaussians(6000, 11, 0.06, 0.01, -1, 3);
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
-  ap.voxel_size = 0.015;
+  ap.voxel_size = 0.02;
   mgs_vdb_sdf_params sp;
   mgs_vdb_sdf_params_default(&sp);
   sp.half_width = 4;

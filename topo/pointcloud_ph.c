@@ -6,10 +6,9 @@
  * edge). Higher dimensions by the standard column reduction over Z/2 with clearing:
  * tetrahedra first (their pivots are the triangles that create H2 classes, which are then
  * skipped), then triangles (their pivots are the edges that create H1 classes). When there
- * are no tetrahedra (Rips up to dimension 2), the triangle pass stops as soon as every
- * edge that created an H1 class has been paired, since no later triangle can change the
- * H1 diagram. A simplex's value is the length of its longest edge, which is its critical
- * edge. */
+ * are no tetrahedra (Rips up to dimension 2), H1 comes from the coboundary reduction of the
+ * edges that closed a cycle instead (h1_by_cohomology: the same pairs, far less fill-in).
+ * A simplex's value is the length of its longest edge, which is its critical edge. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -11,6 +11,19 @@
 #include <sys/wait.h>
 #include "core/mgs_error.h"
 
+/* 1 in a build under AddressSanitizer (GCC defines __SANITIZE_ADDRESS__, clang has the
+ * feature test): the heaviest fast tests take a smaller input there, with the same checks */
+#if defined(__SANITIZE_ADDRESS__)
+#define MGS_TEST_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define MGS_TEST_SANITIZED 1
+#endif
+#endif
+#ifndef MGS_TEST_SANITIZED
+#define MGS_TEST_SANITIZED 0
+#endif
+
 static int mgs_test_failures = 0;
 static int mgs_test_checks = 0;
 

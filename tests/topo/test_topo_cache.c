@@ -37,7 +37,7 @@ static int same(const mgs_diagram *a, const mgs_diagram *b) {
 }
 
 static void run(mgs_topo_construction cons) {
-  mgs_gaussians *g = vt_random_gaussians(6000, 13, 0.06, 0.01, -1, 3);
+  mgs_gaussians *g = vt_random_gaussians(MGS_TEST_SANITIZED ? 2500 : 6000, 13, 0.06, 0.01, -1, 3);
   mgs_vdb_grid *s0 = sdf_of(g);
   for (size_t i = 2; i < g->n; i++)
     if (g->mean[3 * i] > 0.6f && g->mean[3 * i + 1] > 0.6f && g->mean[3 * i + 2] > 0.6f) g->opacity[i] += 1.0f, g->mean[3 * i] -= 0.02f;

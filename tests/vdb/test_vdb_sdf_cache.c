@@ -47,7 +47,7 @@ static int same_diagram(const mgs_vdb_grid *a, const mgs_vdb_grid *b, double hw)
 }
 
 static void run(mgs_vdb_sdf_method method) {
-  mgs_gaussians *g = vt_random_gaussians(6000, 11, 0.06, 0.01, -1, 3);
+  mgs_gaussians *g = vt_random_gaussians(MGS_TEST_SANITIZED ? 2500 : 6000, 11, 0.06, 0.01, -1, 3);
   mgs_vdb_alpha_params ap;
   mgs_vdb_alpha_params_default(&ap);
   ap.voxel_size = 0.02;

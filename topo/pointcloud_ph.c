@@ -255,10 +255,9 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
   }
   /* H0 */
   for (int32_t v = 0; v < nv; v++) par[v] = v;
-  size_t n_pos_edges = 0;
   for (size_t r = 0; r < ne; r++) {
     int32_t ra = uf_find(par, ev[2 * r]), rb = uf_find(par, ev[2 * r + 1]);
-    if (ra == rb) { epos[r] = 1; n_pos_edges++; continue; }
+    if (ra == rb) { epos[r] = 1; continue; }
     par[ra < rb ? rb : ra] = ra < rb ? ra : rb;
     if (elen[r] > 0 && !bars_push(out, 0, 0.0, elen[r], -1, -1, VID(ev[2 * r]), VID(ev[2 * r + 1]))) goto oom;
   }
@@ -368,8 +367,7 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
   ecs.col = calloc(ne ? ne : 1, sizeof *ecs.col);
   ecs.len = calloc(ne ? ne : 1, sizeof *ecs.len);
   if (!ecs.col || !ecs.len) goto oom;
-  size_t left = n_pos_edges;
-  for (size_t r = 0; r < ntv && (left > 0 || nq); r++) {
+  for (size_t r = 0; r < ntv; r++) { /* only with tetrahedra: h1_by_cohomology otherwise */
     if (tri_cleared[r]) continue;
     size_t len = 3;
     memcpy(buf, tri + 3 * r, 3 * sizeof *buf);
@@ -380,7 +378,6 @@ static mgs_status complex_persistence(const double *p, int32_t nv, const int32_t
     if (!ecs.col[piv]) goto oom;
     memcpy(ecs.col[piv], buf, len * sizeof(int32_t));
     ecs.len[piv] = (int32_t)len;
-    left--;
     int32_t dedge = tri[3 * r + 2];
     if (elen[dedge] > elen[piv] &&
         !bars_push(out, 1, elen[piv], elen[dedge], VID(ev[2 * piv]), VID(ev[2 * piv + 1]), VID(ev[2 * dedge]), VID(ev[2 * dedge + 1])))

@@ -41,6 +41,7 @@ static void usage(FILE *f) {
           "  --no-alpha               depth fusion without the alpha-field's grids\n"
           "  --iteration N            run folder: point_cloud/iteration_N (default: the latest)\n"
           "  --views N                virtual views when there is no cameras.json (64)\n"
+          "  --view-size PX           their side in pixels (256): the fusion voxel follows it\n"
           "  --depth median|expected  depth map fused (default: the model's, median for 3DGS)\n"
           "  --fuse-voxel F           fusion voxel size in pixel footprints of the views (1)\n"
           "  --trunc F                truncation in pixel footprints (9)\n"
@@ -95,6 +96,7 @@ int mgs_cmd_vdb(int argc, char **argv) {
       {"from-depth", no_argument, 0, 'D'},       {"from-alpha", no_argument, 0, 'A'},
       {"no-alpha", no_argument, 0, 'N'},         {"iteration", required_argument, 0, 'I'},
       {"views", required_argument, 0, 'V'},      {"depth", required_argument, 0, 'Z'},
+      {"view-size", required_argument, 0, 1002},
       {"fuse-voxel", required_argument, 0, 'x'}, {"trunc", required_argument, 0, 'T'},
       {"trunc-thin", required_argument, 0, 'K'},
       {"fuse-voxel-size", required_argument, 0, 'X'}, {"trunc-size", required_argument, 0, 'S'},
@@ -199,6 +201,13 @@ int mgs_cmd_vdb(int argc, char **argv) {
           return 2;
         }
         if (c == 'V') fo.views = (int)v; else fo.iteration = (int)v;
+        break;
+      case 1002:
+        if (!parse_double(optarg, &v) || v < 8 || v > 16384 || v != floor(v)) {
+          fprintf(stderr, "morsegs vdb: --view-size '%s' must be an integer in [8, 16384]\n", optarg);
+          return 2;
+        }
+        fo.view_size = (int)v;
         break;
       case 'Z':
         if (!strcmp(optarg, "median")) fo.depth = MGS_DEPTH_MEDIAN;

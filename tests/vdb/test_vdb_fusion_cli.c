@@ -74,7 +74,8 @@ static void test_fusion_cli(void) {
   snprintf(cams, sizeof cams, "%s/cameras.json", run_dir);
   write_cameras(cams, 24, 0);
 
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/a.vdb --mesh %s/a.ply", cli(), run_dir, dir, dir);
+  /* (--resolution 128: the alpha-field's grids at half the default, for the sanitizers' sake) */
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/a.vdb --mesh %s/a.ply --resolution 128", cli(), run_dir, dir, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   static char first[8192];
   snprintf(first, sizeof first, "%s", e);
@@ -126,13 +127,13 @@ static void test_fusion_cli(void) {
     fprintf(stderr, "surface choice: fused %.4g, alpha %.4g\n", sf, sa);
   }
   /* --surface alpha: the alpha-field's level set is sdf (and the mesh), the fused one sdf_fused */
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/s.vdb --mesh %s/s.ply --surface alpha", cli(), run_dir, dir, dir);
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/s.vdb --mesh %s/s.ply --surface alpha --resolution 128", cli(), run_dir, dir, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   snprintf(cmd, sizeof cmd,
            "/usr/bin/python3 -c \"import pyopenvdb as v; g=[x.name for x in v.readAllGridMetadata('%s/s.vdb')]; "
            "print(g); assert set(g)=={'sdf','tsdf','tsdf_weight','density','sdf_fused'}\"", dir);
   CHECK(mgs_test_sh("%s", cmd) == 0);
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/t.vdb --mesh %s/t.ply --from-alpha", cli(), run_dir, dir, dir);
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/t.vdb --mesh %s/t.ply --from-alpha --resolution 128", cli(), run_dir, dir, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   {
     mgs_mesh *ms = NULL, *mt = NULL;
@@ -145,7 +146,7 @@ static void test_fusion_cli(void) {
     mgs_mesh_destroy(mt);
   }
   /* --surface fused: the fused level set is sdf whatever the scores */
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/u.vdb --surface fused", cli(), run_dir, dir);
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/u.vdb --surface fused --resolution 128", cli(), run_dir, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   CHECK(strstr(e, "surface choice") == NULL);
   snprintf(cmd, sizeof cmd,
@@ -162,9 +163,23 @@ static void test_fusion_cli(void) {
 
   /* no cameras.json: virtual views, said so */
   remove(cams);
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/b.vdb --views 20 --no-alpha", cli(), run_dir, dir);
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/b.vdb --views 20 --view-size 96 --no-alpha", cli(), run_dir, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
   CHECK(strstr(e, "no cameras.json") && strstr(e, "virtual views"));
+  /* --view-size sets the virtual views' side, and the fusion voxel (1 footprint) follows it:
+   * 48 px against 96 px is a voxel twice as large */
+  {
+    const char *vs = strstr(e, ", voxel ");
+    double v96 = 0, v48 = 0;
+    CHECK(vs && sscanf(vs, ", voxel %lf", &v96) == 1);
+    snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/b2.vdb --views 4 --view-size 48 --no-alpha", cli(), run_dir, dir);
+    CHECK(vt_run(cmd, e, sizeof e) == 0);
+    vs = strstr(e, ", voxel ");
+    CHECK(vs && sscanf(vs, ", voxel %lf", &v48) == 1);
+    CHECK_MSG(fabs(v48 / v96 - 2) < 0.02, "voxel %g at 96 px, %g at 48 px", v96, v48);
+    snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/b3.vdb --view-size 4", cli(), run_dir, dir);
+    CHECK(vt_run(cmd, e, sizeof e) == 2 && strstr(e, "--view-size '4'"));
+  }
 
   /* cameras that see nothing: error, no output */
   write_cameras(cams, 8, 1);
@@ -185,7 +200,7 @@ static void test_fusion_cli(void) {
   CHECK(strstr(e, "cameras.json: camera 0") != NULL);
 
   /* a bare .ply with --from-depth: virtual views */
-  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/e.vdb --from-depth --views 16 --no-alpha", cli(), ply, dir);
+  snprintf(cmd, sizeof cmd, "%s vdb %s -o %s/e.vdb --from-depth --views 16 --view-size 96 --no-alpha", cli(), ply, dir);
   CHECK(vt_run(cmd, e, sizeof e) == 0);
 }
 

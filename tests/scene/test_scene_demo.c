@@ -2,7 +2,8 @@
  * exports and analyses both; the dataset loads, the report puts the two runs side by side
  * with figures a working pipeline reaches and that agree with the files the runs wrote
  * (morse-full's analyses = the rows of its morse_analysis.csv), and a second run with
- * --baseline-only keeps what exists (no overwrite without --force) and reports one column. */
+ * --baseline-only keeps what exists (no overwrite without --force) and reports one column.
+ * At --iters 1000 (the demo's 2000 halved: the same stages, half the test's time). */
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -19,7 +20,7 @@ int main(void) {
   snprintf(root, sizeof root, "%s/%s/out", cwd, mgs_test_tmpdir("scene_demo"));
   snprintf(log_path, sizeof log_path, "%s/demo_log.txt", cwd);
   snprintf(scene, sizeof scene, "%s/scene", root);
-  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' -q", cli, root);
+  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' -q --iters 1000", cli, root);
   CHECK(run_cmd(cmd, log_path) == 0);
   CHECK(file_contains(log_path, "transforms_train.json") && file_contains(log_path, "gt_mesh.ply"));
   mgs_dataset_options o;
@@ -70,29 +71,29 @@ int main(void) {
   char morse[1100], csv[1200], cfg[1200];
   snprintf(morse, sizeof morse, "%s/run-morse", root);
   snprintf(cfg, sizeof cfg, "%s/cfg_args", morse);
-  CHECK(file_contains(cfg, "preset='morse-full'") && file_contains(cfg, "morse_warmup=500") &&
-        file_contains(cfg, "morse_every=250") && file_contains(cfg, "iterations=2000"));
+  CHECK(file_contains(cfg, "preset='morse-full'") && file_contains(cfg, "morse_warmup=250") &&
+        file_contains(cfg, "morse_every=125") && file_contains(cfg, "iterations=1000"));
   snprintf(csv, sizeof csv, "%s/morse_analysis.csv", morse);
   f = fopen(csv, "r");
   CHECK(f != NULL);
   int rows = 0, first = 1, it;
   while (f && fgets(line, sizeof line, f)) {
     if (first) { CHECK(!strncmp(line, "iteration,", 10) && strstr(line, ",spawned,pruned,")); first = 0; continue; }
-    if (sscanf(line, "%d,", &it) == 1 && it >= 500 && it <= 2000) rows++;
+    if (sscanf(line, "%d,", &it) == 1 && it >= 250 && it <= 1000) rows++;
   }
   if (f) fclose(f);
   CHECK_MSG(rows >= 1, "%s: %d analysis rows\n", csv, rows);
   CHECK_MSG(analyses == rows, "report says %d analyses, the CSV has %d rows\n", analyses, rows);
   /* The demo's second training ran in the process after the first: the same training in a
      process of its own gives the same model, byte for byte (no state carried over). */
-  snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s/alone' --iters 2000 --preset morse-full --morse-warmup 500 "
-           "--morse-every 250 --morse-resolution 128 --quiet", cli, scene, root);
+  snprintf(cmd, sizeof cmd, "'%s' train '%s' -o '%s/alone' --iters 1000 --preset morse-full --morse-warmup 250 "
+           "--morse-every 125 --morse-resolution 128 --quiet", cli, scene, root);
   CHECK(run_cmd(cmd, log_path) == 0);
-  snprintf(cmd, sizeof cmd, "cmp '%s/point_cloud/iteration_2000/point_cloud.ply' '%s/alone/point_cloud/iteration_2000/point_cloud.ply'",
+  snprintf(cmd, sizeof cmd, "cmp '%s/point_cloud/iteration_1000/point_cloud.ply' '%s/alone/point_cloud/iteration_1000/point_cloud.ply'",
            morse, root);
   CHECK_MSG(run_cmd(cmd, log_path) == 0, "the demo's morse-full model differs from the same training alone");
   /* --baseline-only: the kept baseline, re-evaluated, in a one-column report */
-  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' -q --baseline-only", cli, root);
+  snprintf(cmd, sizeof cmd, "'%s' demo -o '%s' -q --baseline-only --iters 1000", cli, root);
   CHECK(run_cmd(cmd, log_path) == 0);
   CHECK(file_contains(log_path, "kept") && !file_contains(log_path, "run-morse"));
   CHECK(file_contains(report, "| figure | baseline |\n") && !file_contains(report, "| morse-full |"));

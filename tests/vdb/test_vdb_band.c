@@ -5,7 +5,7 @@
  * interior Gaussians and ragged α-surfaces, did (issue 14: thousands of pairs, jumps of
  * several voxels). Small models of the built-in scenes and of a `morsegs scene` of a mesh
  * (netgen-doc's hinge.stl, or a generated knotted torus when that package is absent) are
- * trained with the CLI at 64x64 and checked at iterations 300, 1000 and 2000; so is a
+ * trained with the CLI at 64x64 and checked at iterations 300, 1000 and 1500; so is a
  * scene of gmsh-doc's lever.stl (sharp edges, through-bores), and a committed trained model
  * of it (test_fixture) is checked at 256 and 512 voxels along the diagonal.
  *
@@ -62,16 +62,16 @@ static void check_grid(const char *vdb, const char *what) {
   mgs_vdb_grid_destroy(g);
 }
 
-/* One scene: dataset, 2000 iterations with saves at 300 and 1000, then SDF + check each. */
+/* One scene: dataset, 1500 iterations with saves at 300 and 1000, then SDF + check each. */
 static void one_scene(const char *name, const char *scene_args) {
   char cmd[4096], dir[512], run[512];
   snprintf(dir, sizeof dir, "%s/data", mgs_test_tmpdir(name));
   snprintf(run, sizeof run, "tmp_%s/run", name);
   snprintf(cmd, sizeof cmd, "%s scene %s -o %s --views 12 --test-views 1 --width 64 --height 64 -q", cli(), scene_args, dir);
   CHECK(sh(cmd) == 0);
-  snprintf(cmd, sizeof cmd, "%s train %s -o %s --iters 2000 --save-at 300,1000 --checkpoint-every 0 --quiet", cli(), dir, run);
+  snprintf(cmd, sizeof cmd, "%s train %s -o %s --iters 1500 --save-at 300,1000 --checkpoint-every 0 --quiet", cli(), dir, run);
   CHECK(sh(cmd) == 0);
-  static const int iters[3] = {300, 1000, 2000};
+  static const int iters[3] = {300, 1000, 1500};
   for (int k = 0; k < 3; k++) {
     char ply[1100], vdb[512], what[256];
     snprintf(ply, sizeof ply, "%s/point_cloud/iteration_%d/point_cloud.ply", run, iters[k]);

@@ -151,7 +151,6 @@ static mgs_status write_record(const mgs_train_config *c, const char *data, cons
   mgs_settings_init(&s);
   mgs_settings_set(&s, "source_path", abs_data, 1);
   mgs_settings_set(&s, "model_path", run, 1);
-  mgs_settings_set(&s, "images", "images", 1);
   mgs_settings_seti(&s, "resolution", c->downscale > 1 ? c->downscale : -1);
   mgs_settings_set(&s, "white_background", c->background == MGS_BG_WHITE ? "True" : "False", 0);
   mgs_settings_set(&s, "data_device", "cpu", 1);

@@ -573,6 +573,7 @@ void mgs_config_dataset_options(const mgs_train_config *c, mgs_dataset_options *
   o->white_background = c->background == MGS_BG_AUTO ? -1 : c->background == MGS_BG_WHITE;
   o->load_images = c->image_cache_mb == 0; /* the cache decodes on demand */
   o->test_every = c->test_every;
+  o->images = c->images;
 }
 
 int mgs_config_morse_options(const mgs_train_config *c, mgs_morse_options *o) {

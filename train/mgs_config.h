@@ -58,6 +58,7 @@ typedef struct mgs_train_config {
   char save_at[256];
   /* 3DGS baseline */
   int iters, downscale, max_width, sh_degree, sh_every, background, test_every;
+  char images[256];
   uint64_t seed;
   int strategy, init, random_points;
   int densify_from, densify_until, densify_every, opacity_reset_every;

@@ -360,6 +360,7 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
   const char *mw = mgs_settings_get(&s, "max_width");
   o.max_width = mw && atoi(mw) > 0 ? atoi(mw) : 0;
   if (te && atoi(te) > 0) o.test_every = atoi(te);
+  o.images = mgs_settings_get(&s, "images"); /* the folder it trained on (images_4, ...) */
   o.load_images = load_images;
   int it = iteration >= 0 ? iteration : mgs_run_latest_iteration(run_dir);
   if (it < 0) {

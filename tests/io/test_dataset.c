@@ -531,6 +531,58 @@ static void test_colmap(void) {
   mgs_dataset_destroy(ds);
 }
 
+/* --images images_2 (the reference's -i, as Mip-NeRF 360 ships images_2/4/8 beside the
+ * full-size images/ with the full-size cameras): each camera scaled to its image, the same
+ * cameras as --downscale 2 of the full-size folder; a folder that is missing, or an image
+ * of another aspect ratio, is a named error. */
+static void test_colmap_images_folder(void) {
+  const char *dir = make_colmap("io_colmap_i2", 0, CM_GOOD);
+  io_mkdir(join(dir, "images_2"));
+  for (int i = 0; i < 9; i++) {
+    char img[64];
+    snprintf(img, sizeof img, "images_2/img_%02d.png", i);
+    io_write_png(join(dir, img), 8, 6, 3);
+  }
+  mgs_dataset_options o, oh;
+  mgs_dataset_options_default(&o);
+  o.load_images = 1;
+  o.images = "images_2";
+  oh = o;
+  oh.images = NULL;
+  oh.downscale = 2;
+  mgs_dataset *d = NULL, *h = NULL;
+  mgs_error err = {0};
+  CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+  CHECK_OK(mgs_dataset_load(dir, &oh, &h, &err), &err);
+  if (d && h && d->n_views[MGS_SPLIT_TRAIN] == 7 && h->n_views[MGS_SPLIT_TRAIN] == 7) {
+    const mgs_view *v1 = &d->views[MGS_SPLIT_TRAIN][0], *v3 = &d->views[MGS_SPLIT_TRAIN][2];
+    CHECK(strstr(v1->image_path, "images_2/img_01.png") != NULL);
+    CHECK(v1->cam.width == 8 && v1->cam.height == 6 && v1->image && v1->image->width == 8);
+    check_project(&v1->cam, 0.5, 0.25, 0, 5, 3.5);     /* f 16 -> 8, c (8, 6) -> (4, 3) */
+    check_project(&v3->cam, 0, 0.25, 0.5, 5.25, 3.625); /* SIMPLE_PINHOLE f 20 -> 10 */
+    for (size_t i = 0; i < 7; i++) {
+      const mgs_camera *a = &d->views[MGS_SPLIT_TRAIN][i].cam, *b = &h->views[MGS_SPLIT_TRAIN][i].cam;
+      CHECK(a->width == b->width && a->height == b->height);
+      CHECK_NEAR(a->fx, b->fx, 1e-12);
+      CHECK_NEAR(a->fy, b->fy, 1e-12);
+      CHECK_NEAR(a->cx, b->cx, 1e-12);
+      CHECK_NEAR(a->cy, b->cy, 1e-12);
+    }
+    CHECK_NEAR(d->extent, h->extent, 1e-12);
+  }
+  mgs_dataset_destroy(d);
+  mgs_dataset_destroy(h);
+  /* another aspect ratio: named */
+  io_write_png(join(dir, "images_2/img_05.png"), 8, 8, 3);
+  d = NULL;
+  CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_FORMAT && d == NULL);
+  CHECK_MSG(strstr(err.msg, "images_2/img_05.png") && strstr(err.msg, "aspect ratio"), "%s", err.msg);
+  /* a folder that is not there: named */
+  o.images = "images_8";
+  CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_IO && d == NULL);
+  CHECK_MSG(strstr(err.msg, "images_8") && strstr(err.msg, "not found"), "%s", err.msg);
+}
+
 static void test_colmap_bad(void) {
   expect_load_fail(make_colmap("io_cm_b1", 1, CM_SIMPLE_RADIAL), 0, MGS_ERR_UNSUPPORTED, "cameras.bin", "SIMPLE_RADIAL");
   expect_load_fail(make_colmap("io_cm_b2", 0, CM_OPENCV), 0, MGS_ERR_UNSUPPORTED, "cameras.txt", "OPENCV");
@@ -574,6 +626,7 @@ int main(void) {
   RUN(test_nerfstudio);
   RUN(test_nerfstudio_bad);
   RUN(test_colmap);
+  RUN(test_colmap_images_folder);
   RUN(test_colmap_bad);
   return mgs_test_finish();
 }

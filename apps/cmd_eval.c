@@ -20,13 +20,14 @@
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs eval RUN [options]\n"
-    "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [--downscale N] [options]\n"
+    "       morsegs eval MODEL --data DATASET -o RUN [--background white|black] [--downscale N] [--images DIR] [options]\n"
     "  MODEL: a model trained elsewhere, in the dataset's frame (the reference's output folder or\n"
     "  .ply, 2DGS, SuperSplat's .compressed.ply, .splat, .spz, .sog or a SOG meta.json, .ksplat), first\n"
     "  made the run folder RUN (point_cloud/iteration_0, the dataset's cameras.json, cfg_args; RUN must\n"
     "  not exist or be empty, nor lie in the dataset), then evaluated as one;\n"
     "  --background: the dataset's default (white for NeRF-synthetic) unless given;\n"
     "  --downscale N: the images at 1/N size, as the model was trained (the reference's --resolution N)\n"
+    "  --images DIR: a COLMAP dataset's image folder the model was trained on (the reference's -i, e.g. images_4)\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --split S          test (default), val or train\n"
     "      --mesh GT          ground-truth mesh for geometry metrics (default: the dataset's gt_mesh.ply): the\n"
@@ -68,8 +69,8 @@ int mgs_cmd_eval(int argc, char **argv) {
                                        {"fused-only", no_argument, 0, 'F'}, {"carve", no_argument, 0, 'C'}, {"mask-carve", required_argument, 0, 1001},
                                        {"data", required_argument, 0, 'D'}, {"output", required_argument, 0, 'o'},
                                        {"background", required_argument, 0, 'G'}, {"downscale", required_argument, 0, 'R'},
-                                       {"no-geometry", no_argument, 0, 1002}, {0, 0, 0, 0}};
-  const char *split_s = "test", *mesh = NULL, *data = NULL, *out = NULL;
+                                       {"no-geometry", no_argument, 0, 1002}, {"images", required_argument, 0, 1003}, {0, 0, 0, 0}};
+  const char *split_s = "test", *mesh = NULL, *data = NULL, *out = NULL, *image_dir = NULL;
   int white = -1, downscale = 0;
   int iteration = -1, images = 1, max_views = 0, c, fused_only = 0, geometry = 1;
   mgs_fusion_opts fo;
@@ -90,6 +91,7 @@ int mgs_cmd_eval(int argc, char **argv) {
       case 'F': fused_only = 1; break;
       case 1002: geometry = 0; break;
       case 'D': data = optarg; break;
+      case 1003: image_dir = optarg; break;
       case 'o': out = optarg; break;
       case 'R': {
         char *end;
@@ -129,14 +131,14 @@ int mgs_cmd_eval(int argc, char **argv) {
     return 2;
   }
   if (optind != argc - 1) { fprintf(stderr, "morsegs eval: exactly one RUN folder (or MODEL with --data) is expected\n"); usage(stderr); return 2; }
-  if (!data != !out || ((white >= 0 || downscale) && !data)) {
-    fprintf(stderr, "morsegs eval: --data DATASET and -o RUN go together (a model trained elsewhere); --background and --downscale need them\n");
+  if (!data != !out || ((white >= 0 || downscale || image_dir) && !data)) {
+    fprintf(stderr, "morsegs eval: --data DATASET and -o RUN go together (a model trained elsewhere); --background, --downscale and --images need them\n");
     return 2;
   }
   if (data) { /* a model trained elsewhere: made a run folder first */
     mgs_error ierr;
     mgs_error_clear(&ierr);
-    if (mgs_run_import(argv[optind], data, white, downscale ? downscale : 1, out, &ierr) != MGS_OK) { mgs_cli_fail("eval", &ierr); return 1; }
+    if (mgs_run_import(argv[optind], data, white, downscale ? downscale : 1, image_dir, out, &ierr) != MGS_OK) { mgs_cli_fail("eval", &ierr); return 1; }
     argv[optind] = (char *)out;
   }
   int split = -1;

@@ -340,10 +340,11 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
  * point_cloud.ply, with the dataset's cameras.json and a cfg_args naming the dataset (its
  * absolute path), the background (white_background: 1 white, 0 black, -1 the dataset's
  * default), the image downscale the model was trained at (>= 1: the reference's
- * --resolution), the scene origin and `imported_from`. The model must be in the dataset's world
+ * --resolution), a COLMAP dataset's image folder (NULL: images; the reference's -i), the scene
+ * origin and `imported_from`. The model must be in the dataset's world
  * frame. out_dir must not exist or be empty (nothing is overwritten). */
 mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, int downscale,
-                          const char *out_dir, mgs_error *err);
+                          const char *images, const char *out_dir, mgs_error *err);
 
 /* The settings record RUN/cfg_args: Python Namespace(...) syntax as the reference (so
  * its viewers find source_path), one key=value per setting. */

@@ -265,7 +265,7 @@ static int path_within(const char *path, const char *dir_abs) {
 }
 
 mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int white_background, int downscale,
-                          const char *out_dir, mgs_error *err) {
+                          const char *images, const char *out_dir, mgs_error *err) {
   if (downscale < 1) return mgs_error_set(err, MGS_ERR_ARG, "%s: downscale %d; it is a factor >= 1", out_dir, downscale);
   if (mgs_path_exists(out_dir)) {
     int empty = 0;
@@ -293,6 +293,7 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
   o.load_images = 0;
   o.white_background = white_background;
   o.downscale = downscale;
+  o.images = images;
   mgs_dataset *ds = NULL;
   mgs_gaussians *g = NULL;
   mgs_status st = mgs_dataset_load(dataset_dir, &o, &ds, err);
@@ -317,6 +318,7 @@ mgs_status mgs_run_import(const char *model_path, const char *dataset_dir, int w
     mgs_settings_seti(&s, "downscale", o.downscale);
     mgs_settings_seti(&s, "max_width", o.max_width);
     mgs_settings_seti(&s, "test_every", o.test_every);
+    mgs_settings_set(&s, "images", images && *images ? images : "images", 1);
     mgs_settings_seti(&s, "sh_degree", g->sh_degree);
     mgs_settings_set(&s, "model", mgs_model_kind_name(g->kind), 1);
     mgs_run_record_origin(&s, ds);

@@ -2,9 +2,75 @@
  * folder without any point file (as the original lego ships), a COLMAP text model with
  * photos on black, and a nerfstudio folder — all made from one rendered scene by
  * tests/train/nerf_to_formats.py — train end to end (short schedules), write a model and
- * record the preset; the background follows the format. */
+ * record the preset; the background follows the format. The COLMAP folder with its images
+ * also at half size in images_2 (as Mip-NeRF 360 ships images_2/4/8): `train --images
+ * images_2` records the folder, its own evaluation reloads it, and `eval MODEL --data
+ * --images images_2` of the same model gives the same PSNR. */
+#include <dirent.h>
+#include <cjson/cJSON.h>
 #include "mgs_test.h"
 #include "core/mgs_core.h"
+
+/* PSNR of results.json's ours_IT in RUN (-1 if absent) */
+static double results_psnr(const char *run, int it) {
+  char path[4096], *text = NULL, key[64];
+  size_t n;
+  snprintf(path, sizeof path, "%s/results.json", run);
+  if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
+  cJSON *j = cJSON_Parse(text);
+  snprintf(key, sizeof key, "ours_%d", it);
+  cJSON *p = cJSON_GetObjectItem(cJSON_GetObjectItem(j, key), "PSNR");
+  double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
+  cJSON_Delete(j);
+  free(text);
+  return v;
+}
+
+static void colmap_images_folder(const char *cli, const char *tmp) {
+  char dir[700], out[800], in[1200], o2[1200];
+  snprintf(dir, sizeof dir, "%s/f/colmap", tmp);
+  snprintf(out, sizeof out, "%s/images_2", dir);
+  mgs_error err = {0};
+  CHECK_OK(mgs_mkdir_p(out, &err), &err);
+  snprintf(in, sizeof in, "%s/images", dir);
+  DIR *d = opendir(in);
+  CHECK(d != NULL);
+  int n = 0;
+  for (struct dirent *e; d && (e = readdir(d));) {
+    if (e->d_name[0] == '.') continue;
+    mgs_image *im = NULL;
+    snprintf(in, sizeof in, "%s/images/%s", dir, e->d_name);
+    snprintf(o2, sizeof o2, "%s/%s", out, e->d_name);
+    CHECK_OK(mgs_image_read(in, &im, &err), &err);
+    mgs_image *h = im ? mgs_image_downscale(im, 2) : NULL;
+    CHECK(h && h->width * 2 == im->width);
+    if (h) CHECK_OK(mgs_image_write(o2, h, &err), &err);
+    mgs_image_destroy(im);
+    mgs_image_destroy(h);
+    n++;
+  }
+  if (d) closedir(d);
+  CHECK(n > 0);
+  char run[800], cfg[900];
+  snprintf(run, sizeof run, "%s/run_colmap_i2", tmp);
+  CHECK(mgs_test_sh("%s train %s -o %s --images images_2 --iters 60 --random-points 3000 --checkpoint-every 0 --quiet "
+                    "> %s.log 2>&1", cli, dir, run, run) == 0);
+  snprintf(cfg, sizeof cfg, "%s/cfg_args", run);
+  CHECK(mgs_test_file_has(cfg, "images='images_2'"));
+  CHECK(mgs_test_sh("%s eval %s --no-images --no-geometry > /dev/null", cli, run) == 0);
+  const double own = results_psnr(run, 60);
+  char imp[800];
+  snprintf(imp, sizeof imp, "%s/imported_i2", tmp);
+  CHECK(mgs_test_sh("%s eval %s/point_cloud/iteration_60/point_cloud.ply --data %s --images images_2 -o %s --no-images "
+                    "--no-geometry > /dev/null", cli, run, dir, imp) == 0);
+  const double imported = results_psnr(imp, 0);
+  fprintf(stderr, "images_2: PSNR %.4f dB in its run, %.4f dB imported\n", own, imported);
+  CHECK_MSG(own > 10 && fabs(own - imported) < 1e-3, "PSNR %.4f in the run, %.4f imported with --images", own, imported);
+  /* the cameras are scaled to the images: 20x20 views of the 40x40 scene */
+  snprintf(cfg, sizeof cfg, "%s/cameras.json", run);
+  CHECK(mgs_test_file_has(cfg, "\"width\":\t20,"));
+  CHECK(mgs_test_sh("%s eval %s/point_cloud/iteration_60/point_cloud.ply --images images_2 2>/dev/null", cli, run) == 2);
+}
 
 int main(void) {
   const char *cli = getenv("MGS_CLI"), *src = getenv("MGS_SOURCE_DIR");
@@ -33,5 +99,6 @@ int main(void) {
       snprintf(want, sizeof want, "white_background=%s", bg[f]);
       CHECK_MSG(mgs_test_file_has(path, want), "%s on %s: not %s", runs[r], formats[f], want);
     }
+  colmap_images_folder(cli, tmp);
   return mgs_test_finish();
 }

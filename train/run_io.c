@@ -362,6 +362,13 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
   const char *mw = mgs_settings_get(&s, "max_width");
   o.max_width = mw && atoi(mw) > 0 ? atoi(mw) : 0;
   if (te && atoi(te) > 0) o.test_every = atoi(te);
+  const char *res = mgs_settings_get(&s, "resolution");
+  if (!ds_s && res) { /* the reference's own cfg_args (no downscale key): its -r, as it applies it */
+    const int r = atoi(res);
+    if (r == 1 || r == 2 || r == 4 || r == 8) o.downscale = r, o.max_width = 0;
+    else if (r == -1) o.max_width = 1600; /* its cap */
+    else if (r > 0) o.max_width = r;     /* a target width (exact where the images are wider) */
+  }
   o.images = mgs_settings_get(&s, "images"); /* the folder it trained on (images_4, ...) */
   o.load_images = load_images;
   int it = iteration >= 0 ? iteration : mgs_run_latest_iteration(run_dir);

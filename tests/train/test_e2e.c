@@ -5,6 +5,8 @@
  * cannot reach. Also: run layout, render, refusal to overwrite, the dataset untouched,
  * resume, and refused MorseGS flags. */
 #include <dirent.h>
+#include <limits.h>
+#include <stdlib.h>
 #include <math.h>
 #include <stdarg.h>
 #include <sys/wait.h>
@@ -103,6 +105,27 @@ int main(void) {
   CHECK(mgs_test_sh("grep -q 'downscale=2' %s/cfg_args", imported) == 0);
   CHECK(results_psnr(imported, 0) > 0 && fabs(results_psnr(imported, 0) - psnr) > 0.01);
   CHECK(mgs_test_sh("%s eval %s --downscale 2 2>/dev/null", cli, run) == 2); /* only with --data */
+  /* a run folder the reference wrote (its cfg_args: resolution, no downscale key) trained at
+     -r 2: evaluated at half size, the figures of --data --downscale 2 */
+  {
+    char inria[4400];
+    snprintf(inria, sizeof inria, "%s/inria_r2", tmp);
+    CHECK(mgs_test_sh("mkdir -p %s/point_cloud/iteration_400 && cp %s %s/point_cloud/iteration_400/ && cp %s/cameras.json %s/",
+                      inria, path, inria, run, inria) == 0);
+    char abs_data[PATH_MAX];
+    CHECK(realpath(data, abs_data) != NULL);
+    snprintf(path, sizeof path, "%s/cfg_args", inria);
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL);
+    if (f) {
+      fprintf(f, "Namespace(data_device='cuda', eval=True, images='images', model_path='./output/3f1c2b', resolution=2, "
+                 "sh_degree=3, source_path='%s', white_background=False)", abs_data);
+      fclose(f);
+    }
+    CHECK(mgs_test_sh("%s eval %s --no-images > /dev/null", cli, inria) == 0);
+    CHECK_NEAR(results_psnr(inria, 400), results_psnr(imported, 0), 1e-9);
+    snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
+  }
 
   /* run layout of the reference */
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);

@@ -7,6 +7,7 @@
 
 #include "core/dataset_internal.h"
 #include "core/mgs_fs.h"
+#include "core/mgs_image.h"
 #include "core/mgs_log.h"
 #include "core/mgs_origin.h"
 #include "core/mgs_parallel.h"
@@ -263,6 +264,15 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
   if (fmt == MGS_DATASET_AUTO)
     return mgs_error_set(err, MGS_ERR_FORMAT,
                          "%s: not a dataset (no transforms_train.json, transforms.json or sparse/0/cameras.{bin,txt})", dir);
+  if (mgs_dataset_other_image_folder(&o)) {
+    if (fmt == MGS_DATASET_NERF_SYNTHETIC)
+      return mgs_error_set(err, MGS_ERR_ARG, "%s: a NeRF-synthetic dataset names its images in transforms_*.json; "
+                           "another image folder ('%s') applies to COLMAP and nerfstudio datasets", dir, o.images);
+    char *f = mgs_path_join(dir, o.images);
+    const int ok = f && mgs_is_dir(f);
+    free(f);
+    if (!ok) return mgs_error_set(err, MGS_ERR_IO, "%s/%s: image folder not found", dir, o.images);
+  }
   mgs_dataset *d = calloc(1, sizeof *d);
   if (!d) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", dir);
   d->format = fmt;
@@ -307,6 +317,23 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
     return st;
   }
   *out = d;
+  return MGS_OK;
+}
+
+/* (as the reference: the field of view from the camera, the resolution from the image) */
+mgs_status mgs_pending_scale_to_image(mgs_pending_view *v, double *sx, double *sy, mgs_error *err) {
+  int w = 0, h = 0, c = 0;
+  mgs_status st = mgs_image_read_size(v->image_path, &w, &h, &c, err);
+  if (st != MGS_OK) return st;
+  if (w == v->width && h == v->height) return MGS_OK;
+  const double r = (double)w / v->width;
+  if (fabs(r * v->height - h) > 1.0)
+    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: image is %dx%d, its camera %dx%d: not the same aspect ratio", v->image_path,
+                         w, h, v->width, v->height);
+  *sx = (double)w / v->width;
+  *sy = (double)h / v->height;
+  v->width = w;
+  v->height = h;
   return MGS_OK;
 }
 

@@ -374,34 +374,9 @@ static void quat_to_w2c(const double q[4], const double t[3], double m[16]) {
   m[15] = 1;
 }
 
-/* An image folder other than images/ (Mip-NeRF 360's images_2/4/8) holds the views at their
- * own size while the cameras keep the full one: as the reference (field of view from the
- * COLMAP camera, resolution from the image), the intrinsics scale to the image. */
-static mgs_status image_scale(mgs_pending_view *v, double *sx, double *sy, mgs_error *err) {
-  int w = 0, h = 0, c = 0;
-  mgs_status st = mgs_image_read_size(v->image_path, &w, &h, &c, err);
-  if (st != MGS_OK) return st;
-  if (w == v->width && h == v->height) return MGS_OK;
-  const double r = (double)w / v->width;
-  if (fabs(r * v->height - h) > 1.0)
-    return mgs_error_set(err, MGS_ERR_FORMAT, "%s: image is %dx%d, its camera %dx%d: not the same aspect ratio", v->image_path,
-                         w, h, v->width, v->height);
-  *sx = (double)w / v->width;
-  *sy = (double)h / v->height;
-  v->width = w;
-  v->height = h;
-  return MGS_OK;
-}
-
 mgs_status mgs_dataset_load_colmap(mgs_dataset *d, const mgs_dataset_options *o, mgs_error *err) {
-  const char *folder = o->images && *o->images ? o->images : "images";
-  const int other_folder = strcmp(folder, "images") != 0;
-  if (other_folder) {
-    char *dir = mgs_path_join(d->root, folder);
-    const int ok = dir && mgs_is_dir(dir);
-    free(dir);
-    if (!ok) return mgs_error_set(err, MGS_ERR_IO, "%s/%s: image folder not found (--images)", d->root, folder);
-  }
+  const int other_folder = mgs_dataset_other_image_folder(o);
+  const char *folder = other_folder ? o->images : "images";
   char *sparse = mgs_path_join(d->root, "sparse/0");
   if (sparse && !mgs_is_dir(sparse)) { free(sparse); sparse = mgs_path_join(d->root, "sparse"); }
   if (!sparse) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", d->root);
@@ -436,7 +411,7 @@ mgs_status mgs_dataset_load_colmap(mgs_dataset *d, const mgs_dataset_options *o,
     v->split = -1;
     if (!v->name || !v->image_path) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", d->root); break; }
     double sx = 1, sy = 1;
-    if (other_folder && (st = image_scale(v, &sx, &sy, err)) != MGS_OK) break;
+    if (other_folder && (st = mgs_pending_scale_to_image(v, &sx, &sy, err)) != MGS_OK) break;
     mgs_camera_init(&v->cam, v->width, v->height, cam->params[0] * sx, cam->params[1] * sy, cam->params[2] * sx,
                     cam->params[3] * sy);
     double w2c[16];

@@ -3,6 +3,7 @@
 #ifndef MGS_DATASET_INTERNAL_H
 #define MGS_DATASET_INTERNAL_H
 #include <cjson/cJSON.h>
+#include <string.h>
 
 #include "core/mgs_dataset.h"
 
@@ -22,6 +23,14 @@ typedef struct mgs_pending_view {
  * a single view always trains). Frees the pending strings. */
 mgs_status mgs_dataset_split_every(mgs_dataset *d, mgs_pending_view *pv, size_t n, int test_every, mgs_error *err);
 void mgs_pending_free(mgs_pending_view *pv, size_t n);
+/* An image folder other than images/ (options.images: Mip-NeRF 360's images_2/4/8,
+ * nerfstudio's images_N) holds the views at their own size while the cameras keep the
+ * full one: reads the image's header, sets v's size to it and *sx, *sy to the intrinsics'
+ * scale (1 if equal); another aspect ratio (beyond a pixel) is an error naming the file. */
+static inline int mgs_dataset_other_image_folder(const mgs_dataset_options *o) {
+  return o->images && *o->images && strcmp(o->images, "images") != 0;
+}
+mgs_status mgs_pending_scale_to_image(mgs_pending_view *v, double *sx, double *sy, mgs_error *err);
 
 /* Per-format loaders: fill d (root, options already set) or fail naming the file. */
 mgs_status mgs_dataset_load_nerf_synthetic(mgs_dataset *d, const mgs_dataset_options *o, mgs_error *err);

@@ -71,6 +71,7 @@ mgs_status mgs_dataset_load_nerfstudio(mgs_dataset *d, const mgs_dataset_options
   mgs_pending_view *pv = NULL;
   size_t npv = 0;
   int use_lists = 0;
+  const int other_folder = mgs_dataset_other_image_folder(o);
   st = check_model(j, path, err);
   const cJSON *frames = cJSON_GetObjectItemCaseSensitive(j, "frames");
   if (st == MGS_OK && !frames) st = mgs_error_set(err, MGS_ERR_FORMAT, "%s: missing field 'frames'", path);
@@ -106,12 +107,21 @@ mgs_status mgs_dataset_load_nerfstudio(mgs_dataset *d, const mgs_dataset_options
     if (split >= 0) use_lists = 1;
     mgs_pending_view *v = &pv[npv++];
     v->name = mgs_strdup(fp);
-    v->image_path = fp[0] == '/' ? mgs_strdup(fp) : mgs_path_join(d->root, fp);
+    if (other_folder) { /* nerfstudio's downscale folders: the file's name under images_N */
+      const char *base = strrchr(fp, '/');
+      char rel[4200];
+      snprintf(rel, sizeof rel, "%s/%s", o->images, base ? base + 1 : fp);
+      v->image_path = mgs_path_join(d->root, rel);
+    } else {
+      v->image_path = fp[0] == '/' ? mgs_strdup(fp) : mgs_path_join(d->root, fp);
+    }
     v->width = (int)in[4];
     v->height = (int)in[5];
-    mgs_camera_init(&v->cam, v->width, v->height, in[0], in[1], in[2], in[3]);
-    mgs_camera_set_c2w_opengl(&v->cam, m);
     if (!v->name || !v->image_path) { st = mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", path); break; }
+    double sx = 1, sy = 1;
+    if (other_folder && (st = mgs_pending_scale_to_image(v, &sx, &sy, err)) != MGS_OK) break;
+    mgs_camera_init(&v->cam, v->width, v->height, in[0] * sx, in[1] * sy, in[2] * sx, in[3] * sy);
+    mgs_camera_set_c2w_opengl(&v->cam, m);
     v->split = split;
   }
   if (st == MGS_OK && use_lists) {

@@ -39,8 +39,9 @@ typedef struct mgs_dataset_options {
   int load_images;           /* 1: read all images now, in parallel (and check their sizes);
                                 0: only check that each image file exists */
   int test_every;            /* COLMAP / nerfstudio without splits: every Nth view is test (8) */
-  const char *images;        /* COLMAP: the image folder under the root (NULL or "" = images/;
-                                the reference's -i). Another folder (Mip-NeRF 360's images_4)
+  const char *images;        /* COLMAP, nerfstudio: the image folder under the root (NULL or "" =
+                                images/; the reference's -i; nerfstudio: each frame's file name
+                                in it). Another folder (Mip-NeRF 360's images_4)
                                 may hold smaller images: each camera is scaled to its image's
                                 size (same aspect ratio within a pixel, else an error) */
 } mgs_dataset_options;

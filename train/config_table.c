@@ -43,7 +43,7 @@ static const mgs_option TABLE[] = {
   {"max-width", "max_width", MGS_OPT_INT, F(max_width), "1600", 0, BIG, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
    "without --downscale, images wider than W are resized to W (the reference's cap; 0 = full size)", NULL},
   {"images", "images", MGS_OPT_STRING, F(images), "images", 0, 0, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
-   "COLMAP: the image folder in DATA (the reference's -i; Mip-NeRF 360's images_4: cameras scaled to its images)", NULL},
+   "COLMAP/nerfstudio: the image folder in DATA (the reference's -i; images_4 of Mip-NeRF 360 or ns-process-data: cameras scaled to its images)", NULL},
   {"sh-degree", "sh_degree", MGS_OPT_INT, F(sh_degree), "3", 0, 3, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,
    "max SH degree", NULL},
   {"sh-every", "sh_increase_every", MGS_OPT_INT, F(sh_every), "1000", 1, BIG, NULL, NULL, MGS_GROUP_BASELINE, REC | MPI,

@@ -580,7 +580,49 @@ static void test_colmap_images_folder(void) {
   /* a folder that is not there: named */
   o.images = "images_8";
   CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_IO && d == NULL);
-  CHECK_MSG(strstr(err.msg, "images_8") && strstr(err.msg, "not found"), "%s", err.msg);
+  CHECK_MSG(strstr(err.msg, "images_8: image folder not found"), "%s", err.msg);
+}
+
+/* nerfstudio's downscale folders (ns-process-data writes images_2/4/8): --images images_2
+ * reads each frame's file name there, cameras scaled to the images (the same as
+ * --downscale 2); a NeRF-synthetic dataset refuses another folder, naming it. */
+static void test_images_folder_other_formats(void) {
+  const char *dir = make_ns("io_ns_i2", NS_TOP, ", \"fl_x\": 32");
+  io_mkdir(join(dir, "images_2"));
+  for (int i = 0; i < 9; i++) {
+    char img[64];
+    snprintf(img, sizeof img, "images_2/frame_%02d.png", i);
+    io_write_png(join(dir, img), 8, 6, 3);
+  }
+  mgs_dataset_options o, oh;
+  mgs_dataset_options_default(&o);
+  o.load_images = 1;
+  o.images = "images_2";
+  oh = o;
+  oh.images = NULL;
+  oh.downscale = 2;
+  mgs_dataset *d = NULL, *h = NULL;
+  mgs_error err = {0};
+  CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+  CHECK_OK(mgs_dataset_load(dir, &oh, &h, &err), &err);
+  if (d && h && d->n_views[MGS_SPLIT_TRAIN] == 7 && h->n_views[MGS_SPLIT_TRAIN] == 7) {
+    CHECK(strstr(d->views[MGS_SPLIT_TRAIN][2].image_path, "images_2/frame_03.png") != NULL);
+    check_project(&d->views[MGS_SPLIT_TRAIN][2].cam, 0.5, 0.25, 0, 6, 2.5); /* fl_x 32 -> 16 */
+    for (size_t i = 0; i < 7; i++) {
+      const mgs_camera *a = &d->views[MGS_SPLIT_TRAIN][i].cam, *b = &h->views[MGS_SPLIT_TRAIN][i].cam;
+      CHECK(a->width == 8 && a->width == b->width && a->height == b->height);
+      CHECK_NEAR(a->fx, b->fx, 1e-12);
+      CHECK_NEAR(a->cy, b->cy, 1e-12);
+    }
+  }
+  mgs_dataset_destroy(d);
+  mgs_dataset_destroy(h);
+  /* NeRF-synthetic: refused, named */
+  dir = make_nerf("io_nerf_i2", good_train_json);
+  io_mkdir(join(dir, "images_2"));
+  d = NULL;
+  CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_ARG && d == NULL);
+  CHECK_MSG(strstr(err.msg, "NeRF-synthetic") && strstr(err.msg, "images_2"), "%s", err.msg);
 }
 
 static void test_colmap_bad(void) {
@@ -627,6 +669,7 @@ int main(void) {
   RUN(test_nerfstudio_bad);
   RUN(test_colmap);
   RUN(test_colmap_images_folder);
+  RUN(test_images_folder_other_formats);
   RUN(test_colmap_bad);
   return mgs_test_finish();
 }

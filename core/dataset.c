@@ -268,10 +268,14 @@ mgs_status mgs_dataset_load(const char *dir, const mgs_dataset_options *opt, mgs
     if (fmt == MGS_DATASET_NERF_SYNTHETIC)
       return mgs_error_set(err, MGS_ERR_ARG, "%s: a NeRF-synthetic dataset names its images in transforms_*.json; "
                            "another image folder ('%s') applies to COLMAP and nerfstudio datasets", dir, o.images);
-    char *f = mgs_path_join(dir, o.images);
+    char *f = o.images[0] == '/' ? mgs_strdup(o.images) : mgs_path_join(dir, o.images); /* as os.path.join */
     const int ok = f && mgs_is_dir(f);
+    if (!ok) {
+      mgs_status st = mgs_error_set(err, MGS_ERR_IO, "%s: image folder not found", f ? f : o.images);
+      free(f);
+      return st;
+    }
     free(f);
-    if (!ok) return mgs_error_set(err, MGS_ERR_IO, "%s/%s: image folder not found", dir, o.images);
   }
   mgs_dataset *d = calloc(1, sizeof *d);
   if (!d) return mgs_error_set(err, MGS_ERR_NOMEM, "%s: out of memory", dir);

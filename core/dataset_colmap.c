@@ -405,7 +405,7 @@ mgs_status mgs_dataset_load_colmap(mgs_dataset *d, const mgs_dataset_options *o,
     v->name = mgs_strdup(im->name);
     char rel[4200];
     snprintf(rel, sizeof rel, "%s/%s", folder, im->name);
-    v->image_path = mgs_path_join(d->root, rel);
+    v->image_path = folder[0] == '/' ? mgs_strdup(rel) : mgs_path_join(d->root, rel); /* as os.path.join */
     v->width = cam->width;
     v->height = cam->height;
     v->split = -1;

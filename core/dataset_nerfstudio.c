@@ -111,7 +111,7 @@ mgs_status mgs_dataset_load_nerfstudio(mgs_dataset *d, const mgs_dataset_options
       const char *base = strrchr(fp, '/');
       char rel[4200];
       snprintf(rel, sizeof rel, "%s/%s", o->images, base ? base + 1 : fp);
-      v->image_path = mgs_path_join(d->root, rel);
+      v->image_path = o->images[0] == '/' ? mgs_strdup(rel) : mgs_path_join(d->root, rel);
     } else {
       v->image_path = fp[0] == '/' ? mgs_strdup(fp) : mgs_path_join(d->root, fp);
     }

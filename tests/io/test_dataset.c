@@ -1,4 +1,6 @@
+#include <limits.h>
 #include <math.h>
+#include <stdlib.h>
 /* Dataset loaders: NeRF-synthetic, nerfstudio and COLMAP (bin and txt) datasets written
  * by the test itself load with the right cameras (a known 3D point projects to the
  * hand-computed pixel), and bad input fails with a message naming the file. */
@@ -577,6 +579,18 @@ static void test_colmap_images_folder(void) {
   d = NULL;
   CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_FORMAT && d == NULL);
   CHECK_MSG(strstr(err.msg, "images_2/img_05.png") && strstr(err.msg, "aspect ratio"), "%s", err.msg);
+  /* an absolute folder is taken as it is (os.path.join's rule, as the reference) */
+  {
+    char abs_dir[PATH_MAX];
+    CHECK(realpath(join(dir, "images_2"), abs_dir) != NULL);
+    io_write_png(join(dir, "images_2/img_05.png"), 8, 6, 3);
+    o.images = abs_dir;
+    CHECK_OK(mgs_dataset_load(dir, &o, &d, &err), &err);
+    if (d) CHECK(!strncmp(d->views[MGS_SPLIT_TRAIN][0].image_path, abs_dir, strlen(abs_dir)) &&
+                 d->views[MGS_SPLIT_TRAIN][0].cam.width == 8);
+    mgs_dataset_destroy(d);
+    d = NULL;
+  }
   /* a folder that is not there: named */
   o.images = "images_8";
   CHECK(mgs_dataset_load(dir, &o, &d, &err) == MGS_ERR_IO && d == NULL);

@@ -158,7 +158,11 @@ int mgs_cmd_eval(int argc, char **argv) {
   mgs_status st = mgs_run_open(run, iteration, 0, &ds, &g, &it, &err);
   if (st) goto done;
   size_t nv = ds->n_views[split];
-  if (nv == 0) { st = mgs_error_set(&err, MGS_ERR_ARG, "%s: the dataset has no %s views", ds->root, split_s); goto done; }
+  if (nv == 0) {
+    st = mgs_error_set(&err, MGS_ERR_ARG, "%s: the dataset has no %s views%s", ds->root, split_s,
+                       !strcmp(split_s, "test") ? " (a run trained with --test-every 0 holds none: --split train evaluates its training views)" : "");
+    goto done;
+  }
   size_t use = max_views > 0 && (size_t)max_views < nv ? (size_t)max_views : nv;
   evdir = mgs_path_join(run, "eval");
   if (images && (st = mgs_mkdir_p(evdir, &err))) goto done;

@@ -361,7 +361,7 @@ mgs_status mgs_run_open(const char *run_dir, int iteration, int load_images, mgs
   /* runs recorded before the 1600 px cap existed trained at full size */
   const char *mw = mgs_settings_get(&s, "max_width");
   o.max_width = mw && atoi(mw) > 0 ? atoi(mw) : 0;
-  if (te && atoi(te) > 0) o.test_every = atoi(te);
+  if (te && atoi(te) >= 0) o.test_every = atoi(te); /* 0: no test views */
   const char *res = mgs_settings_get(&s, "resolution");
   if (!ds_s && res) { /* the reference's own cfg_args (no downscale key): its -r, as it applies it */
     const int r = atoi(res);

@@ -70,6 +70,19 @@ static void colmap_images_folder(const char *cli, const char *tmp) {
   snprintf(cfg, sizeof cfg, "%s/cameras.json", run);
   CHECK(mgs_test_file_has(cfg, "\"width\":\t20,"));
   CHECK(mgs_test_sh("%s eval %s/point_cloud/iteration_60/point_cloud.ply --images images_2 2>/dev/null", cli, run) == 2);
+
+  /* --test-every 0 (the reference without --eval): every view trains, recorded; eval of the
+     test split says why there is none, --split train evaluates */
+  snprintf(run, sizeof run, "%s/run_colmap_all", tmp);
+  CHECK(mgs_test_sh("%s train %s -o %s --test-every 0 --iters 30 --checkpoint-every 0 --quiet > %s.log 2>&1", cli, dir, run, run) == 0);
+  snprintf(cfg, sizeof cfg, "%s.log", run);
+  CHECK(mgs_test_file_has(cfg, ": 16 train views"));
+  snprintf(cfg, sizeof cfg, "%s/cfg_args", run);
+  CHECK(mgs_test_file_has(cfg, "test_every=0,"));
+  CHECK(mgs_test_sh("%s eval %s --no-images --no-geometry > %s/eval_all.txt 2>&1", cli, run, tmp) == 1);
+  snprintf(cfg, sizeof cfg, "%s/eval_all.txt", tmp);
+  CHECK(mgs_test_file_has(cfg, "no test views (a run trained with --test-every 0"));
+  CHECK(mgs_test_sh("%s eval %s --split train --no-images --no-geometry > /dev/null", cli, run) == 0);
 }
 
 int main(void) {

@@ -1,5 +1,6 @@
 /* morsegs render RUN --split test -o DIR: renders a trained run's views to PNGs, with the
- * dataset and settings recorded in RUN/cfg_args. */
+ * dataset and settings recorded in RUN/cfg_args; --reference-layout writes the reference's
+ * render.py folders (SPLIT/ours_N/{renders,gt}/00000.png), which its metrics.py reads. */
 #include <dirent.h>
 #include <getopt.h>
 #include <limits.h>
@@ -15,7 +16,10 @@
 static void usage(FILE *f) {
   fprintf(f,
     "usage: morsegs render RUN -o DIR [options]\n"
+    "       morsegs render RUN --reference-layout [-o DIR]\n"
     "  -o, --output DIR       folder for the PNGs (one per view, named after it)\n"
+    "      --reference-layout as the reference's render.py: DIR (default RUN)/SPLIT/ours_N/renders/00000.png\n"
+    "                         and gt/00000.png (the dataset's image as trained on), in view order, for its metrics.py\n"
     "      --split S          train, val, test (default) or all\n"
     "      --iteration N      which point_cloud/iteration_N (default: the latest)\n"
     "      --force            write into a non-empty DIR\n"
@@ -37,14 +41,100 @@ static int dir_nonempty(const char *dir) {
   return any;
 }
 
+/* The reference's render.py layout under root: SPLIT/ours_IT/renders/%05d.png and
+ * gt/%05d.png for the train and test splits asked for. An existing ours_IT is kept unless
+ * --force (nothing a user had is overwritten). */
+static int reference_layout(const char *run, const char *root, int iteration, int first, int last, int force) {
+  mgs_error err;
+  mgs_error_clear(&err);
+  mgs_dataset *ds = NULL;
+  mgs_gaussians *g = NULL;
+  mgs_raster *r = NULL;
+  mgs_image *img = NULL;
+  char *dir = NULL;
+  int it = 0, rc = 1;
+  size_t written = 0;
+  mgs_status st = mgs_run_open(run, iteration, 0, &ds, &g, &it, &err);
+  if (st) goto done;
+  char abs_out[PATH_MAX], abs_ds[PATH_MAX];
+  if ((st = mgs_mkdir_p(root, &err))) goto done;
+  if (realpath(root, abs_out) && realpath(ds->root, abs_ds) && !strncmp(abs_out, abs_ds, strlen(abs_ds)) &&
+      (abs_out[strlen(abs_ds)] == 0 || abs_out[strlen(abs_ds)] == '/')) {
+    st = mgs_error_set(&err, MGS_ERR_ARG, "%s: output folder is inside the dataset %s; choose another -o", root, ds->root);
+    goto done;
+  }
+  for (int s = first; s <= last; s++) { /* refuse before writing anything */
+    if (s == MGS_SPLIT_VAL || ds->n_views[s] == 0) continue;
+    char sub[128];
+    snprintf(sub, sizeof sub, "%s/ours_%d", mgs_split_name((mgs_split)s), it);
+    free(dir);
+    if (!(dir = mgs_path_join(root, sub))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+    if (mgs_is_dir(dir) && dir_nonempty(dir) && !force) {
+      st = mgs_error_set(&err, MGS_ERR_IO, "%s exists (use --force to write into it)", dir);
+      goto done;
+    }
+  }
+  r = mgs_raster_create();
+  mgs_raster_settings rs;
+  mgs_raster_settings_default(&rs);
+  memcpy(rs.background, ds->background, sizeof rs.background);
+  rs.sh_degree = g->sh_degree;
+  for (int s = first; s <= last; s++) {
+    if (s == MGS_SPLIT_VAL) continue; /* the reference has train and test only */
+    for (size_t i = 0; i < ds->n_views[s]; i++) {
+      mgs_view *v = &ds->views[s][i];
+      char sub[160];
+      static const char *const kind[2] = {"renders", "gt"};
+      for (int k = 0; k < 2; k++) {
+        snprintf(sub, sizeof sub, "%s/ours_%d/%s", mgs_split_name((mgs_split)s), it, kind[k]);
+        free(dir);
+        if (!(dir = mgs_path_join(root, sub))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+        if (i == 0 && (st = mgs_mkdir_p(dir, &err))) goto done;
+        if (k == 0) {
+          mgs_raster_output ro;
+          if ((st = mgs_raster_forward(r, g, &v->cam, &rs, &ro, &err))) goto done;
+          if (!(img = mgs_image_create(ro.width, ro.height, 3))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+          for (size_t q = 0; q < (size_t)ro.width * ro.height * 3; q++) img->data[q] = mgs_clampf(ro.color[q], 0, 1);
+        } else {
+          if ((st = mgs_dataset_load_image(ds, v, &err))) goto done;
+          img = v->image;
+        }
+        char name[32], *path;
+        snprintf(name, sizeof name, "%05zu.png", i);
+        if (!(path = mgs_path_join(dir, name))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
+        st = mgs_image_write(path, img, &err);
+        free(path);
+        if (k == 0) mgs_image_destroy(img);
+        img = NULL;
+        if (st) goto done;
+      }
+      mgs_image_destroy(v->image); /* one view's image at a time */
+      mgs_image_destroy(v->alpha);
+      v->image = v->alpha = NULL;
+      written++;
+    }
+  }
+  printf("rendered %zu views of %s (iteration %d, %zu Gaussians) into %s/{train,test}/ours_%d/{renders,gt}\n", written, run, it,
+         g->n, root, it);
+  rc = 0;
+done:
+  if (rc) mgs_cli_fail("render", &err);
+  free(dir);
+  mgs_raster_destroy(r);
+  mgs_gaussians_destroy(g);
+  mgs_dataset_destroy(ds);
+  return rc;
+}
+
 int mgs_cmd_render(int argc, char **argv) {
   static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"split", required_argument, 0, 's'},
                                        {"iteration", required_argument, 0, 'i'}, {"force", no_argument, 0, 'f'},
                                        {"depth", no_argument, 0, 'D'}, {"normal", no_argument, 0, 'N'},
                                        {"alpha", no_argument, 0, 'A'}, {"depth-png16", required_argument, 0, 'P'},
-                                       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+                                       {"reference-layout", no_argument, 0, 'R'}, {"help", no_argument, 0, 'h'},
+                                       {0, 0, 0, 0}};
   const char *out = NULL, *split = "test";
-  int iteration = -1, force = 0, c;
+  int iteration = -1, force = 0, layout = 0, c;
   mgs_maps_io_opts mo = {0, 0, 0, 0, 1000.0};
   optind = 1;
   while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
@@ -59,6 +149,7 @@ int mgs_cmd_render(int argc, char **argv) {
         break;
       }
       case 'f': force = 1; break;
+      case 'R': layout = 1; break;
       case 'D': mo.depth = 1; break;
       case 'N': mo.normal = 1; break;
       case 'A': mo.alpha = 1; break;
@@ -76,17 +167,23 @@ int mgs_cmd_render(int argc, char **argv) {
       default: usage(stderr); return 2;
     }
   }
-  if (optind != argc - 1 || !out) {
-    fprintf(stderr, "morsegs render: %s\n", !out ? "-o DIR is required" : "exactly one RUN folder is expected");
+  if (optind != argc - 1 || (!out && !layout)) {
+    fprintf(stderr, "morsegs render: %s\n", optind == argc - 1 ? "-o DIR is required" : "exactly one RUN folder is expected");
     usage(stderr);
     return 2;
   }
+  if (layout && (mo.depth || mo.normal || mo.alpha)) {
+    fprintf(stderr, "morsegs render: --reference-layout writes renders and gt only (no --depth, --normal, --alpha)\n");
+    return 2;
+  }
+  if (!out) out = argv[optind];
   int first = -1, last = -1;
   for (int s = 0; s < MGS_SPLIT_COUNT; s++)
     if (!strcmp(split, mgs_split_name((mgs_split)s))) first = last = s;
   if (!strcmp(split, "all")) { first = 0; last = MGS_SPLIT_COUNT - 1; }
   if (first < 0) { fprintf(stderr, "morsegs render: unknown --split '%s' (train, val, test, all)\n", split); return 2; }
   const char *run = argv[optind];
+  if (layout) return reference_layout(run, out, iteration, first, last, force);
   if (mgs_is_dir(out) && dir_nonempty(out) && !force) {
     fprintf(stderr, "morsegs render: %s: output folder is not empty (use --force to write into it)\n", out);
     return 1;

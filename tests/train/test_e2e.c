@@ -143,6 +143,37 @@ int main(void) {
   CHECK(mgs_test_sh("%s render %s --split test -o %s", cli, run, renders) == 0);
   CHECK(count_entries(renders) == 8);
   CHECK(mgs_test_sh("%s render %s --split test -o %s 2>/dev/null", cli, run, renders) != 0); /* not empty, no --force */
+  /* the reference's render.py layout (its metrics.py reads it): RUN/test/ours_400/{renders,gt},
+     00000.png ... in view order; the PSNR of those 8-bit files is eval's within rounding */
+  CHECK(mgs_test_sh("%s render %s --reference-layout > /dev/null", cli, run) == 0);
+  {
+    double sum = 0;
+    int n = 0;
+    for (;; n++) {
+      char rp[4400], gp[4400];
+      snprintf(rp, sizeof rp, "%s/test/ours_400/renders/%05d.png", run, n);
+      snprintf(gp, sizeof gp, "%s/test/ours_400/gt/%05d.png", run, n);
+      if (!mgs_path_exists(rp)) break;
+      mgs_image *a = NULL, *b = NULL;
+      CHECK_OK(mgs_image_read(rp, &a, NULL), (mgs_error *)NULL);
+      CHECK_OK(mgs_image_read(gp, &b, NULL), (mgs_error *)NULL);
+      if (a && b && a->width == b->width && a->height == b->height && a->channels == 3 && b->channels == 3) {
+        double mse = 0;
+        const size_t m = (size_t)a->width * a->height * 3;
+        for (size_t k = 0; k < m; k++) mse += (a->data[k] - b->data[k]) * (a->data[k] - b->data[k]);
+        sum += 10 * log10(1.0 / (mse / m));
+      } else {
+        CHECK_MSG(0, "view %d: render and gt differ in size", n);
+      }
+      mgs_image_destroy(a);
+      mgs_image_destroy(b);
+    }
+    CHECK(n == 8);
+    fprintf(stderr, "reference layout: %d test views, PSNR of the PNGs %.4f dB, eval %.4f dB\n", n, n ? sum / n : 0, psnr);
+    CHECK(n > 0 && fabs(sum / n - psnr) < 0.05);
+    CHECK(mgs_test_sh("%s render %s --reference-layout 2>/dev/null", cli, run) == 1); /* kept without --force */
+    CHECK(mgs_test_sh("%s render %s --reference-layout --depth 2>/dev/null", cli, run) == 2);
+  }
 
   /* never overwrite, never write into the dataset */
   CHECK(mgs_test_sh("%s train %s -o %s %s 2>/dev/null", cli, data, run, common) != 0);

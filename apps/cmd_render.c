@@ -41,6 +41,36 @@ static int dir_nonempty(const char *dir) {
   return any;
 }
 
+/* Creates the output folder, refusing one inside the dataset (DATA is never written to). */
+static mgs_status make_output(const char *out, const mgs_dataset *ds, mgs_error *err) {
+  mgs_status st = mgs_mkdir_p(out, err);
+  if (st) return st;
+  char abs_out[PATH_MAX], abs_ds[PATH_MAX];
+  if (realpath(out, abs_out) && realpath(ds->root, abs_ds) && !strncmp(abs_out, abs_ds, strlen(abs_ds)) &&
+      (abs_out[strlen(abs_ds)] == 0 || abs_out[strlen(abs_ds)] == '/'))
+    return mgs_error_set(err, MGS_ERR_ARG, "%s: output folder is inside the dataset %s; choose another -o", out, ds->root);
+  return MGS_OK;
+}
+
+static void raster_settings(const mgs_dataset *ds, const mgs_gaussians *g, mgs_raster_settings *rs) {
+  mgs_raster_settings_default(rs);
+  memcpy(rs->background, ds->background, sizeof rs->background);
+  rs->sh_degree = g->sh_degree;
+}
+
+/* One view's colours, clamped to [0, 1] as the reference saves them. */
+static mgs_status render_view(mgs_raster *r, const mgs_gaussians *g, const mgs_camera *cam, const mgs_raster_settings *rs,
+                              mgs_image **out, mgs_error *err) {
+  mgs_raster_output ro;
+  mgs_status st = mgs_raster_forward(r, g, cam, rs, &ro, err);
+  if (st) return st;
+  mgs_image *img = mgs_image_create(ro.width, ro.height, 3);
+  if (!img) return mgs_error_set(err, MGS_ERR_NOMEM, "out of memory");
+  for (size_t k = 0; k < (size_t)ro.width * ro.height * 3; k++) img->data[k] = mgs_clampf(ro.color[k], 0, 1);
+  *out = img;
+  return MGS_OK;
+}
+
 /* The reference's render.py layout under root: SPLIT/ours_IT/renders/%05d.png and
  * gt/%05d.png for the train and test splits asked for. An existing ours_IT is kept unless
  * --force (nothing a user had is overwritten). */
@@ -56,13 +86,7 @@ static int reference_layout(const char *run, const char *root, int iteration, in
   size_t written = 0;
   mgs_status st = mgs_run_open(run, iteration, 0, &ds, &g, &it, &err);
   if (st) goto done;
-  char abs_out[PATH_MAX], abs_ds[PATH_MAX];
-  if ((st = mgs_mkdir_p(root, &err))) goto done;
-  if (realpath(root, abs_out) && realpath(ds->root, abs_ds) && !strncmp(abs_out, abs_ds, strlen(abs_ds)) &&
-      (abs_out[strlen(abs_ds)] == 0 || abs_out[strlen(abs_ds)] == '/')) {
-    st = mgs_error_set(&err, MGS_ERR_ARG, "%s: output folder is inside the dataset %s; choose another -o", root, ds->root);
-    goto done;
-  }
+  if ((st = make_output(root, ds, &err))) goto done;
   for (int s = first; s <= last; s++) { /* refuse before writing anything */
     if (s == MGS_SPLIT_VAL || ds->n_views[s] == 0) continue;
     char sub[128];
@@ -76,9 +100,7 @@ static int reference_layout(const char *run, const char *root, int iteration, in
   }
   r = mgs_raster_create();
   mgs_raster_settings rs;
-  mgs_raster_settings_default(&rs);
-  memcpy(rs.background, ds->background, sizeof rs.background);
-  rs.sh_degree = g->sh_degree;
+  raster_settings(ds, g, &rs);
   for (int s = first; s <= last; s++) {
     if (s == MGS_SPLIT_VAL) continue; /* the reference has train and test only */
     for (size_t i = 0; i < ds->n_views[s]; i++) {
@@ -91,10 +113,7 @@ static int reference_layout(const char *run, const char *root, int iteration, in
         if (!(dir = mgs_path_join(root, sub))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
         if (i == 0 && (st = mgs_mkdir_p(dir, &err))) goto done;
         if (k == 0) {
-          mgs_raster_output ro;
-          if ((st = mgs_raster_forward(r, g, &v->cam, &rs, &ro, &err))) goto done;
-          if (!(img = mgs_image_create(ro.width, ro.height, 3))) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
-          for (size_t q = 0; q < (size_t)ro.width * ro.height * 3; q++) img->data[q] = mgs_clampf(ro.color[q], 0, 1);
+          if ((st = render_view(r, g, &v->cam, &rs, &img, &err))) goto done;
         } else {
           if ((st = mgs_dataset_load_image(ds, v, &err))) goto done;
           img = v->image;
@@ -197,26 +216,15 @@ int mgs_cmd_render(int argc, char **argv) {
   size_t written = 0;
   mgs_status st = mgs_run_open(run, iteration, 0, &ds, &g, &it, &err);
   if (st) goto done;
-  char abs_out[PATH_MAX], abs_ds[PATH_MAX];
-  if ((st = mgs_mkdir_p(out, &err))) goto done;
-  if (realpath(out, abs_out) && realpath(ds->root, abs_ds) && !strncmp(abs_out, abs_ds, strlen(abs_ds)) &&
-      (abs_out[strlen(abs_ds)] == 0 || abs_out[strlen(abs_ds)] == '/')) {
-    st = mgs_error_set(&err, MGS_ERR_ARG, "%s: output folder is inside the dataset %s; choose another -o", out, ds->root);
-    goto done;
-  }
+  if ((st = make_output(out, ds, &err))) goto done;
   r = mgs_raster_create();
   mgs_raster_settings rs;
-  mgs_raster_settings_default(&rs);
-  memcpy(rs.background, ds->background, sizeof rs.background);
-  rs.sh_degree = g->sh_degree;
+  raster_settings(ds, g, &rs);
   for (int s = first; s <= last; s++)
     for (size_t i = 0; i < ds->n_views[s]; i++) {
       mgs_view *v = &ds->views[s][i];
-      mgs_raster_output ro;
-      if ((st = mgs_raster_forward(r, g, &v->cam, &rs, &ro, &err))) goto done;
-      mgs_image *img = mgs_image_create(ro.width, ro.height, 3);
-      if (!img) { st = mgs_error_set(&err, MGS_ERR_NOMEM, "out of memory"); goto done; }
-      for (size_t k = 0; k < (size_t)ro.width * ro.height * 3; k++) img->data[k] = mgs_clampf(ro.color[k], 0, 1);
+      mgs_image *img = NULL;
+      if ((st = render_view(r, g, &v->cam, &rs, &img, &err))) goto done;
       char name[512];
       snprintf(name, sizeof name, "%s%s%s.png", last > first ? mgs_split_name((mgs_split)s) : "", last > first ? "_" : "",
                v->name ? v->name : "view");

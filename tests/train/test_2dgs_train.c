@@ -9,24 +9,11 @@
 #include "core/mgs_fs.h"
 #include "core/mgs_ply.h"
 #include "mgs_test.h"
+#include "run_results.h"
 
 /* measured on this scene (docs/notes/2dgs.md): trained ~27-29 dB, frozen ~11 dB */
 #define PSNR_THRESHOLD 22.0
 
-static double results_psnr(const char *run, int iteration) {
-  char path[4200], *text = NULL;
-  size_t n;
-  snprintf(path, sizeof path, "%s/results.json", run);
-  if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
-  cJSON *j = cJSON_Parse(text);
-  char key[64];
-  snprintf(key, sizeof key, "ours_%d", iteration);
-  cJSON *p = cJSON_GetObjectItem(cJSON_GetObjectItem(j, key), "PSNR");
-  double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
-  cJSON_Delete(j);
-  free(text);
-  return v;
-}
 
 int main(void) {
   const char *cli = getenv("MGS_CLI");
@@ -45,7 +32,7 @@ int main(void) {
   CHECK(mgs_test_sh("%s eval %s --no-images > /dev/null", cli, run) == 0);
   CHECK(mgs_test_sh("%s train %s -o %s %s --freeze", cli, data, frozen, common) == 0);
   CHECK(mgs_test_sh("%s eval %s --no-images --no-geometry > /dev/null", cli, frozen) == 0);
-  double psnr = results_psnr(run, 400), psnr0 = results_psnr(frozen, 400);
+  double psnr = mgs_test_results_psnr(run, 400, NULL), psnr0 = mgs_test_results_psnr(frozen, 400, NULL);
   fprintf(stderr, "2DGS test PSNR: trained %.2f dB, frozen %.2f dB, threshold %.1f\n", psnr, psnr0, PSNR_THRESHOLD);
   CHECK(psnr > PSNR_THRESHOLD);
   CHECK(psnr0 > 0 && psnr0 < PSNR_THRESHOLD);
@@ -75,7 +62,7 @@ int main(void) {
   CHECK_OK(mgs_ply_read_gaussians_kind(path, MGS_MODEL_2DGS, NULL, &g, &err), &err);
   mgs_gaussians_destroy(g);
   CHECK(mgs_test_sh("%s eval %s --no-images --no-geometry > /dev/null", cli, run) == 0);
-  double psnr2 = results_psnr(run, 500);
+  double psnr2 = mgs_test_results_psnr(run, 500, NULL);
   fprintf(stderr, "after resume to 500: %.2f dB\n", psnr2);
   CHECK(psnr2 > PSNR_THRESHOLD);
 

@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <cjson/cJSON.h>
 #include "mgs_test.h"
+#include "run_results.h"
 #include "synth.h"
 
 /* threshold calibrated on this scene (see bench/RESULTS-train.md): trained ~26-28 dB,
@@ -20,20 +21,6 @@
 
 static const char *cli;
 
-static double results_psnr(const char *run, int iteration) {
-  char path[4096], *text = NULL;
-  size_t n;
-  snprintf(path, sizeof path, "%s/results.json", run);
-  if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
-  cJSON *j = cJSON_Parse(text);
-  char key[64];
-  snprintf(key, sizeof key, "ours_%d", iteration);
-  cJSON *p = cJSON_GetObjectItem(cJSON_GetObjectItem(j, key), "PSNR");
-  double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
-  cJSON_Delete(j);
-  free(text);
-  return v;
-}
 
 static int count_entries(const char *dir) {
   DIR *d = opendir(dir);
@@ -66,10 +53,10 @@ int main(void) {
   const char *common = "--iters 400 --black --random-points 5000 --seed 1 --quiet --checkpoint-every 100";
   CHECK(mgs_test_sh("%s train %s -o %s %s", cli, data, run, common) == 0);
   CHECK(mgs_test_sh("%s eval %s --no-images > %s/eval.txt", cli, run, tmp) == 0);
-  double psnr = results_psnr(run, 400);
+  double psnr = mgs_test_results_psnr(run, 400, NULL);
   CHECK(mgs_test_sh("%s train %s -o %s %s --freeze", cli, data, frozen, common) == 0);
   CHECK(mgs_test_sh("%s eval %s --no-images > /dev/null", cli, frozen) == 0);
-  double psnr_frozen = results_psnr(frozen, 400);
+  double psnr_frozen = mgs_test_results_psnr(frozen, 400, NULL);
   fprintf(stderr, "test PSNR: trained %.2f dB, frozen %.2f dB, threshold %.1f\n", psnr, psnr_frozen, PSNR_THRESHOLD);
   CHECK(psnr > PSNR_THRESHOLD);
   CHECK(psnr_frozen > 0 && psnr_frozen < PSNR_THRESHOLD); /* the threshold can fail */
@@ -80,12 +67,12 @@ int main(void) {
   snprintf(imported, sizeof imported, "%s/imported", tmp);
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
-  CHECK_NEAR(results_psnr(imported, 0), psnr, 1e-9);
+  CHECK_NEAR(mgs_test_results_psnr(imported, 0, NULL), psnr, 1e-9);
   /* the run folder itself as MODEL (the reference's output layout): its latest iteration */
   char imported_dir[4400];
   snprintf(imported_dir, sizeof imported_dir, "%s/imported_dir", tmp);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images > /dev/null", cli, run, data, imported_dir) == 0);
-  CHECK_NEAR(results_psnr(imported_dir, 0), psnr, 1e-9);
+  CHECK_NEAR(mgs_test_results_psnr(imported_dir, 0, NULL), psnr, 1e-9);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black -o %s --no-images 2>/dev/null", cli, path, data, imported) == 1);
   CHECK(mgs_test_sh("%s eval %s --data %s --no-images 2>/dev/null", cli, path, data) == 2); /* -o missing */
   CHECK(mgs_test_sh("%s eval %s/nothing.spz --data %s -o %s/imp2 2>/dev/null", cli, tmp, data, tmp) == 1);
@@ -98,12 +85,12 @@ int main(void) {
   snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
   snprintf(imported, sizeof imported, "%s/imported_white", tmp);
   CHECK(mgs_test_sh("%s eval %s --data %s -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
-  CHECK(fabs(results_psnr(imported, 0) - psnr) > 0.01);
+  CHECK(fabs(mgs_test_results_psnr(imported, 0, NULL) - psnr) > 0.01);
   /* at half size (a model trained at the reference's --resolution 2): recorded, and other figures */
   snprintf(imported, sizeof imported, "%s/imported_half", tmp);
   CHECK(mgs_test_sh("%s eval %s --data %s --background black --downscale 2 -o %s --no-images > /dev/null", cli, path, data, imported) == 0);
   CHECK(mgs_test_sh("grep -q 'downscale=2' %s/cfg_args", imported) == 0);
-  CHECK(results_psnr(imported, 0) > 0 && fabs(results_psnr(imported, 0) - psnr) > 0.01);
+  CHECK(mgs_test_results_psnr(imported, 0, NULL) > 0 && fabs(mgs_test_results_psnr(imported, 0, NULL) - psnr) > 0.01);
   CHECK(mgs_test_sh("%s eval %s --downscale 2 2>/dev/null", cli, run) == 2); /* only with --data */
   /* a run folder the reference wrote (its cfg_args: resolution, no downscale key) trained at
      -r 2: evaluated at half size, the figures of --data --downscale 2 */
@@ -123,7 +110,7 @@ int main(void) {
       fclose(f);
     }
     CHECK(mgs_test_sh("%s eval %s --no-images > /dev/null", cli, inria) == 0);
-    CHECK_NEAR(results_psnr(inria, 400), results_psnr(imported, 0), 1e-9);
+    CHECK_NEAR(mgs_test_results_psnr(inria, 400, NULL), mgs_test_results_psnr(imported, 0, NULL), 1e-9);
     snprintf(path, sizeof path, "%s/point_cloud/iteration_400/point_cloud.ply", run);
   }
 
@@ -193,7 +180,7 @@ int main(void) {
   CHECK(mgs_test_sh("%s eval %s > /dev/null", cli, run) == 0);
   snprintf(path, sizeof path, "%s/eval", run);
   CHECK(count_entries(path) == 8);
-  CHECK(results_psnr(run, 500) > PSNR_THRESHOLD);
+  CHECK(mgs_test_results_psnr(run, 500, NULL) > PSNR_THRESHOLD);
 
   /* Ctrl-C: a long run gets SIGINT once training started; it writes a checkpoint and the
      current .ply and exits with 130 */

@@ -9,22 +9,9 @@
 #include <dirent.h>
 #include <cjson/cJSON.h>
 #include "mgs_test.h"
+#include "run_results.h"
 #include "core/mgs_core.h"
 
-/* PSNR of results.json's ours_IT in RUN (-1 if absent) */
-static double results_psnr(const char *run, int it) {
-  char path[4096], *text = NULL, key[64];
-  size_t n;
-  snprintf(path, sizeof path, "%s/results.json", run);
-  if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
-  cJSON *j = cJSON_Parse(text);
-  snprintf(key, sizeof key, "ours_%d", it);
-  cJSON *p = cJSON_GetObjectItem(cJSON_GetObjectItem(j, key), "PSNR");
-  double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
-  cJSON_Delete(j);
-  free(text);
-  return v;
-}
 
 static void colmap_images_folder(const char *cli, const char *tmp) {
   char dir[700], out[800], in[1200], o2[1200];
@@ -58,12 +45,12 @@ static void colmap_images_folder(const char *cli, const char *tmp) {
   snprintf(cfg, sizeof cfg, "%s/cfg_args", run);
   CHECK(mgs_test_file_has(cfg, "images='images_2'"));
   CHECK(mgs_test_sh("%s eval %s --no-images --no-geometry > /dev/null", cli, run) == 0);
-  const double own = results_psnr(run, 60);
+  const double own = mgs_test_results_psnr(run, 60, NULL);
   char imp[800];
   snprintf(imp, sizeof imp, "%s/imported_i2", tmp);
   CHECK(mgs_test_sh("%s eval %s/point_cloud/iteration_60/point_cloud.ply --data %s --images images_2 -o %s --no-images "
                     "--no-geometry > /dev/null", cli, run, dir, imp) == 0);
-  const double imported = results_psnr(imp, 0);
+  const double imported = mgs_test_results_psnr(imp, 0, NULL);
   fprintf(stderr, "images_2: PSNR %.4f dB in its run, %.4f dB imported\n", own, imported);
   CHECK_MSG(own > 10 && fabs(own - imported) < 1e-3, "PSNR %.4f in the run, %.4f imported with --images", own, imported);
   /* the cameras are scaled to the images: 20x20 views of the 40x40 scene */

@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <cjson/cJSON.h>
 #include "mgs_test.h"
+#include "run_results.h"
 #include "core/mgs_core.h"
 
 static const char *cli;
@@ -22,18 +23,7 @@ static double eval_train_geo(const char *run, int it, int geometry, int *has_geo
   if (mgs_test_sh("%s eval %s --iteration %d --split train --no-images %s > /dev/null", cli, run, it,
                   geometry ? "" : "--no-geometry") != 0)
     return -1;
-  char path[4096], *text = NULL, key[64];
-  size_t n;
-  snprintf(path, sizeof path, "%s/results.json", run);
-  if (mgs_read_file(path, &text, &n, NULL) != MGS_OK) return -1;
-  cJSON *j = cJSON_Parse(text);
-  snprintf(key, sizeof key, "ours_%d", it);
-  cJSON *r = cJSON_GetObjectItem(j, key), *p = cJSON_GetObjectItem(r, "PSNR");
-  double v = cJSON_IsNumber(p) ? p->valuedouble : -1;
-  if (has_geometry) *has_geometry = cJSON_GetObjectItem(r, "geometry") != NULL;
-  cJSON_Delete(j);
-  free(text);
-  return v;
+  return mgs_test_results_psnr(run, it, has_geometry);
 }
 static double eval_train(const char *run, int it) { return eval_train_geo(run, it, 0, NULL); }
 

@@ -33,6 +33,9 @@ typedef struct topo_term {
   size_t stale;                /* pairs left out at the last evaluation (moved > 1 voxel) */
   size_t *end_pair;            /* end -> 2 * pair + (0 birth, 1 death) */
   double *pts;
+  /* the lists inverted (built with them, or at the first use after a checkpoint): each
+     Gaussian that is a candidate of some end, and its candidate rows in ascending order */
+  size_t n_inv, *inv_id, *inv_start, *inv_rows;
   mgs_gaussians *loc, *locg;
 } topo_term;
 
@@ -40,6 +43,9 @@ static void topo_clear(topo_term *t) {
   if (t->gat.start) morse_gather_free(&t->gat);
   free(t->end_pair); t->end_pair = NULL;
   free(t->pts); t->pts = NULL;
+  free(t->inv_id); free(t->inv_start); free(t->inv_rows);
+  t->inv_id = t->inv_start = t->inv_rows = NULL;
+  t->n_inv = 0;
   t->n_ends = 0;
   t->built_analysis = -1;
 }
@@ -143,6 +149,59 @@ static void end_scale(void *vp, size_t b, size_t e) {
   }
 }
 
+/* Counting sort of the candidate rows by Gaussian. Rows are visited in ascending order, so
+   each Gaussian's rows stay ascending: the scatter below sums every element in the order
+   the serial loop over rows did, bit for bit, but in parallel and with sequential writes
+   (the serial loop's random writes were most of L_topo's own time). */
+static mgs_status inverse_build(topo_term *t, mgs_error *err) {
+  const size_t total = t->gat.start[t->n_ends], n = t->built_n;
+  size_t *cur = calloc(n + 1, sizeof(size_t));
+  if (!cur) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  for (size_t j = 0; j < total; j++) cur[t->gat.idx[j]]++;
+  size_t nu = 0;
+  for (size_t i = 0; i < n; i++) nu += cur[i] > 0;
+  t->inv_id = malloc((nu + 1) * sizeof(size_t));
+  t->inv_start = malloc((nu + 1) * sizeof(size_t));
+  t->inv_rows = malloc((total + 1) * sizeof(size_t));
+  if (!t->inv_id || !t->inv_start || !t->inv_rows) {
+    free(cur);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  }
+  size_t u = 0, pos = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (!cur[i]) continue;
+    t->inv_id[u] = i;
+    t->inv_start[u++] = pos;
+    size_t c = cur[i];
+    cur[i] = pos; /* from here on: the next free slot of Gaussian i */
+    pos += c;
+  }
+  t->inv_start[nu] = pos;
+  for (size_t j = 0; j < total; j++) t->inv_rows[cur[t->gat.idx[j]]++] = j;
+  t->n_inv = nu;
+  free(cur);
+  return MGS_OK;
+}
+
+typedef struct scatter_job { const topo_term *t; mgs_gaussians *grad; } scatter_job;
+
+static void scatter_rows(void *vp, size_t b, size_t e) {
+  const scatter_job *sj = vp;
+  const topo_term *t = sj->t;
+  const mgs_gaussians *L = t->locg;
+  mgs_gaussians *G = sj->grad;
+  for (size_t u = b; u < e; u++) {
+    const size_t i = t->inv_id[u];
+    for (size_t r = t->inv_start[u]; r < t->inv_start[u + 1]; r++) {
+      const size_t j = t->inv_rows[r];
+      for (int q = 0; q < 3; q++) G->mean[3 * i + q] += L->mean[3 * j + q];
+      for (int q = 0; q < 3; q++) G->log_scale[3 * i + q] += L->log_scale[3 * j + q];
+      for (int q = 0; q < 4; q++) G->rot[4 * i + q] += L->rot[4 * j + q];
+      G->opacity[i] += L->opacity[j];
+    }
+  }
+}
+
 /* Loss (unweighted) on the current model; with grad, adds beta * dL/dθ into it. */
 static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_gaussians *grad, double beta,
                             double *loss, double *short_pers, mgs_error *err) {
@@ -221,15 +280,11 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
     mgs_parallel_for(0, t->n_ends, 8, end_scale, &job);
     for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
       if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the gradient at a bar end is not finite");
-    /* scatter, in a fixed order */
-    for (size_t j = 0; j < total && st == MGS_OK; j++) {
-      size_t i = t->gat.idx[j];
-      for (int gr = 0; gr < MGS_PARAM_SH_DC; gr++) {
-        int dim = mgs_param_dim((mgs_param_group)gr);
-        const float *src = mgs_gaussians_group(t->locg, (mgs_param_group)gr) + j * (size_t)dim;
-        float *dst = mgs_gaussians_group(grad, (mgs_param_group)gr) + i * (size_t)dim;
-        for (int q = 0; q < dim; q++) dst[q] += src[q];
-      }
+    /* scatter: per Gaussian, its rows in ascending order (the same sums as a serial pass) */
+    if (st == MGS_OK && !t->inv_start) st = inverse_build(t, err);
+    if (st == MGS_OK) {
+      scatter_job sj = {t, grad};
+      mgs_parallel_for(0, t->n_inv, 256, scatter_rows, &sj);
     }
   }
   free(aval); free(den); free(est); free(out);

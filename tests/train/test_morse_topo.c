@@ -5,8 +5,12 @@
  * persistence falls, and so does the one of a fresh analysis); the seed's `literal`
  * formula must lengthen them. Also: the term's re-evaluated bar ends equal the analysis'
  * values on the unchanged model, and its gradient matches central differences of its
- * own (fixed-pairing) loss along the gradient direction. */
+ * own (fixed-pairing) loss along the gradient direction and, group by group, along
+ * directions with the gradient's signs and random magnitudes (which also catch a group
+ * dropped or scattered to the wrong Gaussians). */
 #include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include "mgs_test.h"
@@ -160,6 +164,58 @@ static void directional_fd(void) {
   mgs_gaussians_destroy(gr);
 }
 
+/* Per parameter group, the term's gradient against central differences of its fixed-pairing
+ * loss along a direction that has the gradient's signs with random magnitudes: a group whose
+ * gradient the term drops or scatters to the wrong rows gives a derivative the differences
+ * do not see (the direction along the gradient itself cannot tell: it drops both sides). */
+static void group_fd(void) {
+  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
+  mgs_morse_options o;
+  options(&o, MGS_MORSE_TOPO_ELIMINATE);
+  mgs_morse_ctx *c = NULL;
+  mgs_term *t = NULL;
+  mgs_error err;
+  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c, &err), &err);
+  CHECK_OK(mgs_term_topo_create(c, 1, &t, &err), &err);
+  mgs_term_step s;
+  memset(&s, 0, sizeof s);
+  s.model = g; s.grad = gr; s.iteration = 1; s.iterations = 10;
+  zero(gr, g->n);
+  CHECK_OK(t->ops->model_grad(t->self, &s, &err), &err);
+  uint64_t rs = 12345;
+  static const char *const names[] = {"mean", "log_scale", "rot", "opacity"};
+  for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
+    const size_t m = g->n * (size_t)mgs_param_dim((mgs_param_group)k);
+    const float *d = mgs_gaussians_group(gr, (mgs_param_group)k);
+    double *dir = calloc(m, sizeof(double)), a = 0, dmax = 0;
+    for (size_t i = 0; i < m; i++) {
+      rs = rs * 6364136223846793005ULL + 1442695040888963407ULL;
+      double u = 0.5 + (double)(rs >> 11) / 9007199254740992.0;
+      dir[i] = d[i] > 0 ? u : d[i] < 0 ? -u : 0;
+      a += dir[i] * d[i];
+      dmax = fmax(dmax, fabs(d[i]));
+    }
+    CHECK_MSG(a > 0, "the term gives group %s no gradient", names[k]);
+    /* a step of at most 2e-4 per value (world units, log-scale, quaternion, logit) */
+    const double h = 2e-4;
+    mgs_gaussians *gp = mgs_gaussians_clone(g), *gm = mgs_gaussians_clone(g);
+    float *pp = mgs_gaussians_group(gp, (mgs_param_group)k), *pm = mgs_gaussians_group(gm, (mgs_param_group)k);
+    for (size_t i = 0; i < m; i++) { pp[i] += (float)(h * dir[i]); pm[i] -= (float)(h * dir[i]); }
+    double Lp, Lm, P;
+    CHECK_OK(mgs_term_topo_eval(c, gp, &Lp, &P, &err), &err);
+    CHECK_OK(mgs_term_topo_eval(c, gm, &Lm, &P, &err), &err);
+    double fd = (Lp - Lm) / (2 * h);
+    fprintf(stderr, "group %-9s: analytic %.6g, central differences %.6g (largest gradient %.3g)\n", names[k], a, fd, dmax);
+    CHECK_MSG(fabs(fd - a) < 0.05 * a, "group %s: analytic %g, central differences %g", names[k], a, fd);
+    mgs_gaussians_destroy(gp); mgs_gaussians_destroy(gm);
+    free(dir);
+  }
+  mgs_term_destroy(t);
+  mgs_morse_ctx_unref(c);
+  mgs_gaussians_destroy(g);
+  mgs_gaussians_destroy(gr);
+}
+
 /* A strategy that replaces every Gaussian (Mini-Splatting's reinitialisations) makes the
  * analysis of the old model void: the term is off from the next iteration until the next
  * analysis, and stays so across a checkpoint; a run without replacement writes the same
@@ -222,6 +278,7 @@ int main(void) {
   mgs_parallel_set_threads(1);
   RUN(replaced);
   RUN(directional_fd);
+  RUN(group_fd);
   RUN(eliminate);
   RUN(literal);
   return mgs_test_finish();

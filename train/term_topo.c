@@ -18,6 +18,7 @@
 #include "train/mgs_term.h"
 #include "topo/mgs_topo_grad.h"
 #include "core/mgs_parallel.h"
+#include "core/mgs_log.h"
 
 typedef struct topo_term {
   mgs_morse_ctx *ctx;
@@ -67,6 +68,8 @@ static mgs_status topo_prepare(topo_term *t, const mgs_gaussians *g, int it, mgs
   t->built_analysis = r->iteration;
   t->built_n = g->n;
   t->built_it = it;
+  mgs_debug("topo loss @%d: %zu bar ends, %zu candidate rows (%.1f per end) of %zu Gaussians", it, t->n_ends,
+            t->gat.start[t->n_ends], t->n_ends ? (double)t->gat.start[t->n_ends] / (double)t->n_ends : 0.0, g->n);
   return MGS_OK;
 }
 

@@ -474,10 +474,13 @@ FloatTree::Ptr sdf_closest_raw(const FloatGrid &alpha, float tau, int w) {
   // Rings 1..w: the nearest of the 26 neighbours' closest points in the previous ring,
   // refined by the same iteration from there (the seeds' points are a voxel apart on the
   // surface, too coarse by themselves: 0.1 voxel at 1 voxel off a 4-voxel sphere).
+  // Ring k is the previous ring grown by one voxel, minus the voxels already known: a voxel
+  // at 26-neighbour distance k from the seeds has a neighbour at k - 1, so this is the known
+  // set's own dilation minus itself, without dilating and copying the whole band w times.
   MaskTree known(seeds);
   std::unique_ptr<MaskTree> prev(new MaskTree(seeds));
   for (int k = 1; k <= w; k++) {
-    MaskTree ring(known);
+    MaskTree ring(*prev);
     tools::dilateActiveValues(ring, 1, tools::NN_FACE_EDGE_VERTEX, tools::EXPAND_TILES);
     ring.topologyDifference(known);
     ring.voxelizeActiveTiles();

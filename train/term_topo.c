@@ -11,6 +11,7 @@
  * constants. Bars in the loss are those with persistence in [min_bar voxels, ε_sig) at the
  * analysis (morse_in_loss). The loss is measured in units of ε_sig² (scale-free β). */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include "train/morse_internal.h"
@@ -37,6 +38,10 @@ typedef struct topo_term {
   /* the lists inverted (built with them, or at the first use after a checkpoint): each
      Gaussian that is a candidate of some end, and its candidate rows in ascending order */
   size_t n_inv, *inv_id, *inv_start, *inv_rows;
+  /* the analysis' pairs in the loss set (morse_in_loss), and each end's place among them
+     (built at the first use after a rebuild): the others add nothing to the loss, so the
+     loss is taken on these alone, not on a copy of the whole diagram every iteration */
+  size_t n_lp, *lp, *end_local;
   mgs_gaussians *loc, *locg;
 } topo_term;
 
@@ -47,6 +52,9 @@ static void topo_clear(topo_term *t) {
   free(t->inv_id); free(t->inv_start); free(t->inv_rows);
   t->inv_id = t->inv_start = t->inv_rows = NULL;
   t->n_inv = 0;
+  free(t->lp); free(t->end_local);
+  t->lp = t->end_local = NULL;
+  t->n_lp = 0;
   t->n_ends = 0;
   t->built_analysis = -1;
 }
@@ -205,6 +213,29 @@ static void scatter_rows(void *vp, size_t b, size_t e) {
   }
 }
 
+static mgs_status loss_set_build(topo_term *t, mgs_error *err) {
+  const mgs_morse_options *o = &t->ctx->o;
+  const mgs_morse_result *r = &t->ctx->r;
+  const double eps_sig = o->eps_sig * r->diagonal;
+  size_t *local = malloc((r->n + 1) * sizeof(size_t));
+  t->lp = malloc((r->n + 1) * sizeof(size_t));
+  t->end_local = malloc((t->n_ends + 1) * sizeof(size_t));
+  if (!local || !t->lp || !t->end_local) {
+    free(local);
+    return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
+  }
+  size_t m = 0;
+  for (size_t k = 0; k < r->n; k++) {
+    local[k] = SIZE_MAX;
+    if (morse_in_loss(o, &r->pairs[k].p, eps_sig, r->voxel_size)) { local[k] = m; t->lp[m++] = k; }
+  }
+  t->n_lp = m;
+  /* (the analysis gives ends only to pairs in the set; one outside would carry no weight) */
+  for (size_t e = 0; e < t->n_ends; e++) t->end_local[e] = local[t->end_pair[e] / 2];
+  free(local);
+  return MGS_OK;
+}
+
 /* Loss (unweighted) on the current model; with grad, adds beta * dL/dθ into it. */
 static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_gaussians *grad, double beta,
                             double *loss, double *short_pers, mgs_error *err) {
@@ -216,19 +247,16 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
   if (r->iteration == 0 || r->n == 0) return MGS_OK;
   mgs_status st = topo_prepare(t, g, it, err);
   if (st) return st;
+  if (!t->lp && (st = loss_set_build(t, err)) != MGS_OK) return st;
+  const size_t nl = t->n_lp;
   mgs_diagram d;
   memset(&d, 0, sizeof d);
-  d.n = d.capacity = r->n;
-  d.pairs = malloc(r->n * sizeof(mgs_pair));
-  double *dlb = calloc(r->n, sizeof(double)), *dld = calloc(r->n, sizeof(double));
+  d.n = d.capacity = nl;
+  d.pairs = malloc((nl + 1) * sizeof(mgs_pair));
+  double *dlb = calloc(nl + 1, sizeof(double)), *dld = calloc(nl + 1, sizeof(double));
   if (!d.pairs || !dlb || !dld) { free(d.pairs); free(dlb); free(dld); return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory"); }
   double eps_sig = o->eps_sig * r->diagonal;
-  /* pairs outside the loss set get dimension 3 (no mask bit) */
-  for (size_t k = 0; k < r->n; k++) {
-    d.pairs[k] = r->pairs[k].p;
-    const mgs_pair *p = &r->pairs[k].p;
-    if (!morse_in_loss(o, p, eps_sig, r->voxel_size)) d.pairs[k].dim = 3;
-  }
+  for (size_t m = 0; m < nl; m++) d.pairs[m] = r->pairs[t->lp[m]].p;
   /* every end's candidate Gaussians side by side, gathered once per iteration; each end
      reads (and writes its gradient into) its own slice, so ends run in parallel */
   size_t total = t->gat.start[t->n_ends];
@@ -248,16 +276,17 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
      longer where the analysis saw it, and makes new sub-voxel ones (measured: +60 % short
      bars at 7000 iterations with resets, before this rule). */
   size_t stale = 0;
-  int *out = malloc((r->n + 1) * sizeof(int)); /* dimension of a stale pair, else -1 */
+  int *out = malloc((nl + 1) * sizeof(int)); /* dimension of a stale pair, else -1 */
   if (!out && st == MGS_OK) st = mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
-  for (size_t k = 0; out && k < r->n; k++) out[k] = -1;
+  for (size_t m = 0; out && m < nl; m++) out[m] = -1;
   for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++) {
-    size_t k = t->end_pair[e] / 2;
-    const mgs_morse_pair *mp = &r->pairs[k];
+    const size_t m = t->end_local[e];
+    if (m == SIZE_MAX) continue;
+    const mgs_morse_pair *mp = &r->pairs[t->end_pair[e] / 2];
     double shift = (t->end_pair[e] & 1) ? -(aval[e] - mp->ad) / mp->gd : -(aval[e] - mp->ab) / mp->gb;
-    if (!(fabs(shift) <= r->voxel_size) && d.pairs[k].dim < 3) { stale++; out[k] = d.pairs[k].dim; d.pairs[k].dim = 3; }
-    if (t->end_pair[e] & 1) d.pairs[k].death = mp->p.death + shift;
-    else d.pairs[k].birth = mp->p.birth + shift;
+    if (!(fabs(shift) <= r->voxel_size) && d.pairs[m].dim < 3) { stale++; out[m] = d.pairs[m].dim; d.pairs[m].dim = 3; }
+    if (t->end_pair[e] & 1) d.pairs[m].death = mp->p.death + shift;
+    else d.pairs[m].birth = mp->p.birth + shift;
   }
   t->stale = stale;
   if (st == MGS_OK) {
@@ -266,18 +295,18 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
        costs β whatever the units of the scene) */
     double unit = 1.0 / (eps_sig * eps_sig);
     *loss = unit * mgs_topo_loss(&d, kind, eps_sig, o->dims, dlb, dld);
-    for (size_t k = 0; k < r->n; k++) { dlb[k] *= unit; dld[k] *= unit; }
+    for (size_t m = 0; m < nl; m++) { dlb[m] *= unit; dld[m] *= unit; }
     if (short_pers) /* every pair the analysis put in the loss, stale ones included */
-      for (size_t k = 0; k < r->n; k++) {
-        int dim = out[k] >= 0 ? out[k] : d.pairs[k].dim;
-        if (dim < 3 && ((o->dims >> dim) & 1u)) *short_pers += fabs(d.pairs[k].death - d.pairs[k].birth);
+      for (size_t m = 0; m < nl; m++) {
+        int dim = out[m] >= 0 ? out[m] : d.pairs[m].dim;
+        if (dim < 3 && ((o->dims >> dim) & 1u)) *short_pers += fabs(d.pairs[m].death - d.pairs[m].birth);
       }
   }
   if (grad && st == MGS_OK) {
     double *w = aval; /* reused: the weight of each end */
     for (size_t e = 0; e < t->n_ends; e++) {
-      size_t k = t->end_pair[e] / 2;
-      w[e] = beta * ((t->end_pair[e] & 1) ? dld[k] : dlb[k]);
+      const size_t m = t->end_local[e];
+      w[e] = m == SIZE_MAX ? 0.0 : beta * ((t->end_pair[e] & 1) ? dld[m] : dlb[m]);
     }
     job.weight = w;
     mgs_parallel_for(0, t->n_ends, 8, end_scale, &job);

@@ -176,6 +176,8 @@ static mgs_status inverse_build(topo_term *t, mgs_error *err) {
   t->inv_rows = malloc((total + 1) * sizeof(size_t));
   if (!t->inv_id || !t->inv_start || !t->inv_rows) {
     free(cur);
+    free(t->inv_id); free(t->inv_start); free(t->inv_rows);
+    t->inv_id = t->inv_start = t->inv_rows = NULL; /* (so the next call builds again) */
     return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
   }
   size_t u = 0, pos = 0;
@@ -222,6 +224,8 @@ static mgs_status loss_set_build(topo_term *t, mgs_error *err) {
   t->end_local = malloc((t->n_ends + 1) * sizeof(size_t));
   if (!local || !t->lp || !t->end_local) {
     free(local);
+    free(t->lp); free(t->end_local);
+    t->lp = t->end_local = NULL; /* (so the next call builds again) */
     return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
   }
   size_t m = 0;

@@ -119,23 +119,29 @@ static void run(mgs_morse_topo kind) {
 static void eliminate(void) { run(MGS_MORSE_TOPO_ELIMINATE); }
 static void literal(void) { run(MGS_MORSE_TOPO_LITERAL); }
 
-/* The term's gradient against central differences of its fixed-pairing loss along the
- * gradient direction (the directional derivative), on the mean, scale and opacity groups
- * (the temporary point-gradient gives rotation none; the morse-grad branch checks that). */
-static void directional_fd(void) {
-  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
+/* One analysis of the scene (eliminate) and the term's gradient at its iteration, into gr. */
+static void term_gradient(mgs_gaussians *g, mgs_gaussians *gr, mgs_morse_ctx **c, mgs_term **t) {
   mgs_morse_options o;
   options(&o, MGS_MORSE_TOPO_ELIMINATE);
-  mgs_morse_ctx *c = NULL;
-  mgs_term *t = NULL;
   mgs_error err;
-  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c, &err), &err);
-  CHECK_OK(mgs_term_topo_create(c, 1, &t, &err), &err);
+  CHECK_OK(mgs_morse_ctx_create(&o, NULL, c, &err), &err);
+  CHECK_OK(mgs_term_topo_create(*c, 1, t, &err), &err);
   mgs_term_step s;
   memset(&s, 0, sizeof s);
   s.model = g; s.grad = gr; s.iteration = 1; s.iterations = 10;
   zero(gr, g->n);
-  CHECK_OK(t->ops->model_grad(t->self, &s, &err), &err);
+  CHECK_OK((*t)->ops->model_grad((*t)->self, &s, &err), &err);
+}
+
+/* The term's gradient against central differences of its fixed-pairing loss along the
+ * gradient direction (the directional derivative), on the mean, scale and opacity groups
+ * together (rotation: group_fd below). */
+static void directional_fd(void) {
+  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
+  mgs_morse_ctx *c = NULL;
+  mgs_term *t = NULL;
+  mgs_error err;
+  term_gradient(g, gr, &c, &t);
   double gg = 0;
   for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
     if (k == MGS_PARAM_ROT) continue;
@@ -170,18 +176,10 @@ static void directional_fd(void) {
  * do not see (the direction along the gradient itself cannot tell: it drops both sides). */
 static void group_fd(void) {
   mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
-  mgs_morse_options o;
-  options(&o, MGS_MORSE_TOPO_ELIMINATE);
   mgs_morse_ctx *c = NULL;
   mgs_term *t = NULL;
   mgs_error err;
-  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &c, &err), &err);
-  CHECK_OK(mgs_term_topo_create(c, 1, &t, &err), &err);
-  mgs_term_step s;
-  memset(&s, 0, sizeof s);
-  s.model = g; s.grad = gr; s.iteration = 1; s.iterations = 10;
-  zero(gr, g->n);
-  CHECK_OK(t->ops->model_grad(t->self, &s, &err), &err);
+  term_gradient(g, gr, &c, &t);
   uint64_t rs = 12345;
   static const char *const names[] = {"mean", "log_scale", "rot", "opacity"};
   for (int k = 0; k < MGS_PARAM_SH_DC; k++) {

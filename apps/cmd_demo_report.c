@@ -17,6 +17,10 @@
 /* The figures of one run. NAN / -1 = not written by the stage. */
 typedef struct run_figs {
   double psnr, ssim, gaussians, chamfer, accuracy, completeness, fscore, fscore_rel, floaters;
+  double pieces;                             /* the α-field surface's connected pieces */
+  double f_chamfer, f_accuracy, f_completeness, f_fscore, f_pieces; /* the depth-fused surface */
+  double agree_fused, agree_alpha;           /* the export's criterion (agreement with the renders) */
+  char exported[16];                         /* geometry.fused.surface_choice.sdf: "fused" / "alpha" */
   double train_s, analyses, analysis_s, term_s;
   int betti[3], betti_p[3]; /* SDF at t = 0: all classes / those persisting over 2 voxels */
   double active_voxels, voxel;
@@ -124,6 +128,18 @@ static void read_figs(const demo_run *r, run_figs *f) {
   f->fscore = num(geo, "fscore");
   f->fscore_rel = num(geo, "fscore_threshold_relative");
   f->floaters = num(geo, "floaters");
+  f->pieces = num(geo, "surface_pieces");
+  const cJSON *fu = geo ? cJSON_GetObjectItemCaseSensitive(geo, "fused") : NULL;
+  const cJSON *ch = fu ? cJSON_GetObjectItemCaseSensitive(fu, "surface_choice") : NULL;
+  f->f_chamfer = num(fu, "chamfer");
+  f->f_accuracy = num(fu, "chamfer_accuracy");
+  f->f_completeness = num(fu, "chamfer_completeness");
+  f->f_fscore = num(fu, "fscore");
+  f->f_pieces = num(fu, "surface_pieces");
+  f->agree_fused = num(ch, "fused_agreement");
+  f->agree_alpha = num(ch, "alpha_agreement");
+  const cJSON *sdf = ch ? cJSON_GetObjectItemCaseSensitive(ch, "sdf") : NULL;
+  snprintf(f->exported, sizeof f->exported, "%s", cJSON_IsString(sdf) ? sdf->valuestring : "");
   cJSON_Delete(res);
 
   cJSON *ts = read_json(r->run_dir, "train_stats.json");
@@ -244,22 +260,34 @@ int demo_report(const demo_ctx *ctx) {
   fprintf(b, "\n|---|");
   for (int i = 0; i < n; i++) fprintf(b, "---|");
   fprintf(b, "\n");
+  char tmp[96];
 #define ROW(label, expr) do { for (int i = 0; i < n; i++) { const run_figs *f = &figs[i]; char *c = cell[i]; (void)f; expr; } row(b, label, cells, n); } while (0)
   ROW("training", what_ran(c, W, f));
   ROW("iterations / seed", snprintf(c, W, "%s / %s", cfg(f, "iterations"), cfg(f, "seed")));
   ROW("PSNR (test views)", fmt(c, W, "%.2f dB", f->psnr));
   ROW("SSIM", fmt(c, W, "%.4f", f->ssim));
   ROW("Gaussians", fmt(c, W, "%.0f", f->gaussians));
-  ROW("Chamfer vs GT mesh (mean of both directions; accuracy / completeness)",
-      isfinite(f->chamfer) ? snprintf(c, W, "%.4f (%.4f / %.4f)", f->chamfer, f->accuracy, f->completeness) : snprintf(c, W, "n/a"));
-  ROW("F-score (threshold: share of the GT diagonal)",
-      isfinite(f->fscore) ? snprintf(c, W, "%.3f (%g %%)", f->fscore, 100.0 * f->fscore_rel) : snprintf(c, W, "n/a"));
+  ROW("Chamfer vs GT mesh, α-field surface {A = 0.5} (mean of both directions; accuracy / completeness; pieces)",
+      isfinite(f->chamfer) ? snprintf(c, W, "%.4f (%.4f / %.4f); %.0f", f->chamfer, f->accuracy, f->completeness, f->pieces)
+                           : snprintf(c, W, "n/a"));
+  ROW("Chamfer vs GT mesh, depth-fused surface (TSDF of the training views' rendered depth; same columns)",
+      isfinite(f->f_chamfer) ? snprintf(c, W, "%.4f (%.4f / %.4f); %.0f", f->f_chamfer, f->f_accuracy, f->f_completeness,
+                                        f->f_pieces)
+                             : snprintf(c, W, "n/a"));
+  ROW("F-score, α-field / depth-fused surface (threshold: share of the GT diagonal)",
+      isfinite(f->fscore) ? snprintf(c, W, "%.3f / %s (%g %%)", f->fscore, fmt(tmp, sizeof tmp, "%.3f", f->f_fscore),
+                                     100.0 * f->fscore_rel)
+                          : snprintf(c, W, "n/a"));
+  ROW("surface `morsegs vdb RUN` exports as `sdf` (the one that agrees better with the rendered depth)",
+      f->exported[0] ? snprintf(c, W, "%s (%.4f against %.4f)", !strcmp(f->exported, "alpha") ? "α-field" : f->exported,
+                                !strcmp(f->exported, "alpha") ? f->agree_alpha : f->agree_fused,
+                                !strcmp(f->exported, "alpha") ? f->agree_fused : f->agree_alpha)
+                     : snprintf(c, W, "n/a"));
   ROW("floaters (H2: opacity < 0.01, > 3 sigma from GT)", fmt(c, W, "%.0f", f->floaters));
   ROW("Betti numbers of the SDF at t = 0, all features (shape: 1, 2, 0)", fmt_betti(c, W, f->betti));
   ROW("Betti numbers of features persisting over 2 voxels (shape: 1, 2, 0)", fmt_betti(c, W, f->betti_p));
   ROW("active voxels of the SDF", fmt(c, W, "%.0f", f->active_voxels));
   ROW("training wall time", fmt(c, W, "%.1f s", f->train_s));
-  char tmp[96];
   ROW("Morse analyses (α-field, SDF, persistence, ...)",
       !isfinite(f->analyses) ? snprintf(c, W, "–")
       : f->csv_rows > 0 ? snprintf(c, W, "%.0f, at iterations %d..%d: %s", f->analyses, f->first_it, f->last_it,
@@ -299,7 +327,11 @@ int demo_report(const demo_ctx *ctx) {
   fprintf(b, ".\n\nFiles (%s): `point_cloud/iteration_%d/point_cloud.ply` (3DGS layout), "
                 "`eval/` (render | GT | error), `scene.vdb` (grids `density`, `sdf`), `surface.ply`, `persistence/` "
                 "(diagram.txt/json/png/svg, barcode, betti.txt, critical.vdb)%s. Beside this file: REPORT.html (the page "
-                "to open) and `surface_views/` (its Embree pictures of each run's surface.ply).\n",
+                "to open) and `surface_views/` (its Embree pictures of each run's surface.ply). `scene.vdb`, "
+                "`surface.ply`, their pictures and `persistence/` are made from the trained `.ply` alone: the "
+                "α-field's surface, the field MorseGS analyses. `morsegs vdb RUN -o OUT.vdb --mesh OUT.ply` on a run "
+                "folder writes the surface of the table's export row as `sdf` (the depth-fused one also needs the "
+                "run's cameras and renders).\n",
             n > 1 ? "per run, in `run/` and `run-morse/`" : "in `run/`", ctx->iters,
             n > 1 ? "; `run-morse/morse_analysis.csv` (one row per Morse analysis)" : "");
   }

@@ -44,7 +44,11 @@ int main(void) {
   int b[2][3] = {{-1, -1, -1}, {-1, -1, -1}}, header = 0, analyses = -1, spawned = -1, pruned = -1, base_dash = 0;
   const char *k_psnr = "| PSNR (test views) |", *k_g = "| Gaussians |",
              *k_b = "| Betti numbers of features persisting over 2 voxels (shape: 1, 2, 0) |",
-             *k_an = "| Morse analyses (", *k_sp = "| Morse spawned / pruned Gaussians (sum over analyses) |";
+             *k_an = "| Morse analyses (", *k_sp = "| Morse spawned / pruned Gaussians (sum over analyses) |",
+             *k_ca = "| Chamfer vs GT mesh, α-field surface", *k_cf = "| Chamfer vs GT mesh, depth-fused surface",
+             *k_ex = "| surface `morsegs vdb RUN` exports as `sdf`";
+  double cha[2] = {-1, -1}, chf[2] = {-1, -1};
+  char ex[2][16] = {"", ""};
   while (f && fgets(line, sizeof line, f)) {
     if (!strncmp(line, "| figure | baseline | morse-full |", 34)) header = 1;
     if (!strncmp(line, k_psnr, strlen(k_psnr))) sscanf(line + strlen(k_psnr), " %lf dB | %lf dB |", &psnr[0], &psnr[1]);
@@ -56,6 +60,11 @@ int main(void) {
       if (cells) base_dash = !strncmp(cells, ") | – |", strlen(") | – |")), sscanf(cells + strlen(") | – |"), " %d,", &analyses);
     }
     if (!strncmp(line, k_sp, strlen(k_sp))) sscanf(line + strlen(k_sp), " – | %d / %d |", &spawned, &pruned);
+    /* both surfaces' Chamfer and the one the export takes, per column (past the label's " |") */
+    const char *cells = strstr(line, ") |");
+    if (cells && !strncmp(line, k_ca, strlen(k_ca))) sscanf(cells + 3, " %lf (%*[^|]| %lf", &cha[0], &cha[1]);
+    if (cells && !strncmp(line, k_cf, strlen(k_cf))) sscanf(cells + 3, " %lf (%*[^|]| %lf", &chf[0], &chf[1]);
+    if (cells && !strncmp(line, k_ex, strlen(k_ex))) sscanf(cells + 3, " %15s (%*[^|]| %15s", ex[0], ex[1]);
   }
   if (f) fclose(f);
   CHECK(header);
@@ -66,6 +75,11 @@ int main(void) {
   CHECK(b[1][0] >= 1 && b[1][1] >= 0 && b[1][2] >= 0);
   CHECK(base_dash);
   CHECK(spawned >= 0 && pruned >= 0);
+  for (int i = 0; i < 2; i++) {
+    CHECK_MSG(cha[i] > 0 && cha[i] < 0.2 && chf[i] > 0 && chf[i] < 0.2, "column %d: Chamfer alpha %g, fused %g\n", i, cha[i],
+              chf[i]);
+    CHECK_MSG(!strcmp(ex[i], "fused") || !strcmp(ex[i], "α-field"), "column %d exports '%s'\n", i, ex[i]);
+  }
   /* The morse-full run: its preset and scaled schedule recorded, one CSV row per analysis,
    * and the report's count is that number of rows. */
   char morse[1100], csv[1200], cfg[1200];

@@ -14,11 +14,15 @@
 #include "topo/mgs_diagram_tools.h"
 #include "train/mgs_train.h"
 
+/* One surface's geometry against the GT mesh (eval's results.json). */
+typedef struct surf_figs {
+  double chamfer, accuracy, completeness, fscore, pieces;
+} surf_figs;
+
 /* The figures of one run. NAN / -1 = not written by the stage. */
 typedef struct run_figs {
-  double psnr, ssim, gaussians, chamfer, accuracy, completeness, fscore, fscore_rel, floaters;
-  double pieces;                             /* the α-field surface's connected pieces */
-  double f_chamfer, f_accuracy, f_completeness, f_fscore, f_pieces; /* the depth-fused surface */
+  double psnr, ssim, gaussians, fscore_rel, floaters;
+  surf_figs alpha, fused;                    /* the α-field's surface, the depth-fused one */
   double agree_fused, agree_alpha;           /* the export's criterion (agreement with the renders) */
   char exported[16];                         /* geometry.fused.surface_choice.sdf: "fused" / "alpha" */
   double train_s, analyses, analysis_s, term_s;
@@ -108,6 +112,14 @@ static void read_csv(const char *run_dir, run_figs *f) {
   free(text);
 }
 
+static void read_surface(const cJSON *o, surf_figs *s) {
+  s->chamfer = num(o, "chamfer");
+  s->accuracy = num(o, "chamfer_accuracy");
+  s->completeness = num(o, "chamfer_completeness");
+  s->fscore = num(o, "fscore");
+  s->pieces = num(o, "surface_pieces");
+}
+
 static void read_figs(const demo_run *r, run_figs *f) {
   memset(f, 0, sizeof *f);
   mgs_settings_init(&f->cfg);
@@ -122,20 +134,12 @@ static void read_figs(const demo_run *r, run_figs *f) {
   f->psnr = num(ours, "PSNR");
   f->ssim = num(ours, "SSIM");
   f->gaussians = num(ours, "gaussians");
-  f->chamfer = num(geo, "chamfer");
-  f->accuracy = num(geo, "chamfer_accuracy");
-  f->completeness = num(geo, "chamfer_completeness");
-  f->fscore = num(geo, "fscore");
+  read_surface(geo, &f->alpha);
   f->fscore_rel = num(geo, "fscore_threshold_relative");
   f->floaters = num(geo, "floaters");
-  f->pieces = num(geo, "surface_pieces");
   const cJSON *fu = geo ? cJSON_GetObjectItemCaseSensitive(geo, "fused") : NULL;
   const cJSON *ch = fu ? cJSON_GetObjectItemCaseSensitive(fu, "surface_choice") : NULL;
-  f->f_chamfer = num(fu, "chamfer");
-  f->f_accuracy = num(fu, "chamfer_accuracy");
-  f->f_completeness = num(fu, "chamfer_completeness");
-  f->f_fscore = num(fu, "fscore");
-  f->f_pieces = num(fu, "surface_pieces");
+  read_surface(fu, &f->fused);
   f->agree_fused = num(ch, "fused_agreement");
   f->agree_alpha = num(ch, "alpha_agreement");
   const cJSON *sdf = ch ? cJSON_GetObjectItemCaseSensitive(ch, "sdf") : NULL;
@@ -178,6 +182,11 @@ static void read_figs(const demo_run *r, run_figs *f) {
 static const char *fmt(char *buf, size_t n, const char *f, double v) {
   if (!isfinite(v)) snprintf(buf, n, "n/a");
   else snprintf(buf, n, f, v);
+  return buf;
+}
+static const char *fmt_surface(char *buf, size_t n, const surf_figs *s) {
+  if (!isfinite(s->chamfer)) snprintf(buf, n, "n/a");
+  else snprintf(buf, n, "%.4f (%.4f / %.4f); %.0f", s->chamfer, s->accuracy, s->completeness, s->pieces);
   return buf;
 }
 static const char *fmt_betti(char *buf, size_t n, const int b[3]) {
@@ -268,16 +277,13 @@ int demo_report(const demo_ctx *ctx) {
   ROW("SSIM", fmt(c, W, "%.4f", f->ssim));
   ROW("Gaussians", fmt(c, W, "%.0f", f->gaussians));
   ROW("Chamfer vs GT mesh, α-field surface {A = 0.5} (mean of both directions; accuracy / completeness; pieces)",
-      isfinite(f->chamfer) ? snprintf(c, W, "%.4f (%.4f / %.4f); %.0f", f->chamfer, f->accuracy, f->completeness, f->pieces)
-                           : snprintf(c, W, "n/a"));
+      fmt_surface(c, W, &f->alpha));
   ROW("Chamfer vs GT mesh, depth-fused surface (TSDF of the training views' rendered depth; same columns)",
-      isfinite(f->f_chamfer) ? snprintf(c, W, "%.4f (%.4f / %.4f); %.0f", f->f_chamfer, f->f_accuracy, f->f_completeness,
-                                        f->f_pieces)
-                             : snprintf(c, W, "n/a"));
+      fmt_surface(c, W, &f->fused));
   ROW("F-score, α-field / depth-fused surface (threshold: share of the GT diagonal)",
-      isfinite(f->fscore) ? snprintf(c, W, "%.3f / %s (%g %%)", f->fscore, fmt(tmp, sizeof tmp, "%.3f", f->f_fscore),
-                                     100.0 * f->fscore_rel)
-                          : snprintf(c, W, "n/a"));
+      isfinite(f->alpha.fscore) ? snprintf(c, W, "%.3f / %s (%g %%)", f->alpha.fscore,
+                                           fmt(tmp, sizeof tmp, "%.3f", f->fused.fscore), 100.0 * f->fscore_rel)
+                                : snprintf(c, W, "n/a"));
   ROW("surface `morsegs vdb RUN` exports as `sdf` (the one that agrees better with the rendered depth)",
       f->exported[0] ? snprintf(c, W, "%s (%.4f against %.4f)", !strcmp(f->exported, "alpha") ? "α-field" : f->exported,
                                 !strcmp(f->exported, "alpha") ? f->agree_alpha : f->agree_fused,

@@ -24,7 +24,7 @@ typedef struct run_figs {
   double psnr, ssim, gaussians, fscore_rel, floaters;
   surf_figs alpha, fused;                    /* the α-field's surface, the depth-fused one */
   double agree_fused, agree_alpha;           /* the export's criterion (agreement with the renders) */
-  char exported[16];                         /* geometry.fused.surface_choice.sdf: "fused" / "alpha" */
+  int export_alpha;                          /* geometry.fused.surface_choice.sdf: 1 "alpha", 0 "fused", -1 absent */
   double train_s, analyses, analysis_s, term_s;
   int betti[3], betti_p[3]; /* SDF at t = 0: all classes / those persisting over 2 voxels */
   double active_voxels, voxel;
@@ -143,7 +143,7 @@ static void read_figs(const demo_run *r, run_figs *f) {
   f->agree_fused = num(ch, "fused_agreement");
   f->agree_alpha = num(ch, "alpha_agreement");
   const cJSON *sdf = ch ? cJSON_GetObjectItemCaseSensitive(ch, "sdf") : NULL;
-  snprintf(f->exported, sizeof f->exported, "%s", cJSON_IsString(sdf) ? sdf->valuestring : "");
+  f->export_alpha = !cJSON_IsString(sdf) ? -1 : !strcmp(sdf->valuestring, "alpha");
   cJSON_Delete(res);
 
   cJSON *ts = read_json(r->run_dir, "train_stats.json");
@@ -285,10 +285,9 @@ int demo_report(const demo_ctx *ctx) {
                                            fmt(tmp, sizeof tmp, "%.3f", f->fused.fscore), 100.0 * f->fscore_rel)
                                 : snprintf(c, W, "n/a"));
   ROW("surface `morsegs vdb RUN` exports as `sdf` (the one that agrees better with the rendered depth)",
-      f->exported[0] ? snprintf(c, W, "%s (%.4f against %.4f)", !strcmp(f->exported, "alpha") ? "α-field" : f->exported,
-                                !strcmp(f->exported, "alpha") ? f->agree_alpha : f->agree_fused,
-                                !strcmp(f->exported, "alpha") ? f->agree_fused : f->agree_alpha)
-                     : snprintf(c, W, "n/a"));
+      f->export_alpha < 0 ? snprintf(c, W, "n/a")
+      : f->export_alpha   ? snprintf(c, W, "α-field (%.4f against %.4f)", f->agree_alpha, f->agree_fused)
+                          : snprintf(c, W, "fused (%.4f against %.4f)", f->agree_fused, f->agree_alpha));
   ROW("floaters (H2: opacity < 0.01, > 3 sigma from GT)", fmt(c, W, "%.0f", f->floaters));
   ROW("Betti numbers of the SDF at t = 0, all features (shape: 1, 2, 0)", fmt_betti(c, W, f->betti));
   ROW("Betti numbers of features persisting over 2 voxels (shape: 1, 2, 0)", fmt_betti(c, W, f->betti_p));

@@ -35,26 +35,32 @@ typedef struct topo_term {
   size_t stale;                /* pairs left out at the last evaluation (moved > 1 voxel) */
   size_t *end_pair;            /* end -> 2 * pair + (0 birth, 1 death) */
   double *pts;
-  /* the lists inverted (built with them, or at the first use after a checkpoint): each
-     Gaussian that is a candidate of some end, and its candidate rows in ascending order */
+  /* Derived from the lists and the analysis at the first step after a rebuild (or after a
+     checkpoint restored the lists), all together (lists_derive):
+     - the lists inverted: each Gaussian that is a candidate of some end, and its candidate
+       rows in ascending order;
+     - the analysis' pairs in the loss set (morse_in_loss) and each end's place among them:
+       the others add nothing to the loss, so it is taken on these alone, not on a copy of
+       the whole diagram every iteration. */
+  int derived;
   size_t n_inv, *inv_id, *inv_start, *inv_rows;
-  /* the analysis' pairs in the loss set (morse_in_loss), and each end's place among them
-     (built at the first use after a rebuild): the others add nothing to the loss, so the
-     loss is taken on these alone, not on a copy of the whole diagram every iteration */
   size_t n_lp, *lp, *end_local;
   mgs_gaussians *loc, *locg;
 } topo_term;
+
+static void derived_free(topo_term *t) {
+  free(t->inv_id); free(t->inv_start); free(t->inv_rows);
+  free(t->lp); free(t->end_local);
+  t->inv_id = t->inv_start = t->inv_rows = t->lp = t->end_local = NULL;
+  t->n_inv = t->n_lp = 0;
+  t->derived = 0;
+}
 
 static void topo_clear(topo_term *t) {
   if (t->gat.start) morse_gather_free(&t->gat);
   free(t->end_pair); t->end_pair = NULL;
   free(t->pts); t->pts = NULL;
-  free(t->inv_id); free(t->inv_start); free(t->inv_rows);
-  t->inv_id = t->inv_start = t->inv_rows = NULL;
-  t->n_inv = 0;
-  free(t->lp); free(t->end_local);
-  t->lp = t->end_local = NULL;
-  t->n_lp = 0;
+  derived_free(t);
   t->n_ends = 0;
   t->built_analysis = -1;
 }
@@ -160,24 +166,27 @@ static void end_scale(void *vp, size_t b, size_t e) {
   }
 }
 
-/* Counting sort of the candidate rows by Gaussian. Rows are visited in ascending order, so
-   each Gaussian's rows stay ascending: the scatter below sums every element in the order
-   the serial loop over rows did, bit for bit, but in parallel and with sequential writes
-   (the serial loop's random writes were most of L_topo's own time). */
-static mgs_status inverse_build(topo_term *t, mgs_error *err) {
+/* The derived lists (see topo_term). The inversion is a counting sort of the candidate rows
+   by Gaussian; rows are visited in ascending order, so each Gaussian's rows stay ascending
+   and the scatter below sums every element in the order a serial loop over rows would, bit
+   for bit, but in parallel and with sequential writes (the serial loop's random writes were
+   most of L_topo's own time). */
+static mgs_status lists_derive(topo_term *t, mgs_error *err) {
+  const mgs_morse_options *o = &t->ctx->o;
+  const mgs_morse_result *r = &t->ctx->r;
   const size_t total = t->gat.start[t->n_ends], n = t->built_n;
-  size_t *cur = calloc(n + 1, sizeof(size_t));
-  if (!cur) return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
-  for (size_t j = 0; j < total; j++) cur[t->gat.idx[j]]++;
-  size_t nu = 0;
-  for (size_t i = 0; i < n; i++) nu += cur[i] > 0;
+  size_t nu = 0, *cur = calloc(n + 1, sizeof(size_t)), *local = malloc((r->n + 1) * sizeof(size_t));
+  for (size_t j = 0; cur && j < total; j++) cur[t->gat.idx[j]]++;
+  for (size_t i = 0; cur && i < n; i++) nu += cur[i] > 0;
   t->inv_id = malloc((nu + 1) * sizeof(size_t));
   t->inv_start = malloc((nu + 1) * sizeof(size_t));
   t->inv_rows = malloc((total + 1) * sizeof(size_t));
-  if (!t->inv_id || !t->inv_start || !t->inv_rows) {
+  t->lp = malloc((r->n + 1) * sizeof(size_t));
+  t->end_local = malloc((t->n_ends + 1) * sizeof(size_t));
+  if (!cur || !local || !t->inv_id || !t->inv_start || !t->inv_rows || !t->lp || !t->end_local) {
     free(cur);
-    free(t->inv_id); free(t->inv_start); free(t->inv_rows);
-    t->inv_id = t->inv_start = t->inv_rows = NULL; /* (so the next call builds again) */
+    free(local);
+    derived_free(t); /* (so the next step derives them again) */
     return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
   }
   size_t u = 0, pos = 0;
@@ -192,7 +201,18 @@ static mgs_status inverse_build(topo_term *t, mgs_error *err) {
   t->inv_start[nu] = pos;
   for (size_t j = 0; j < total; j++) t->inv_rows[cur[t->gat.idx[j]]++] = j;
   t->n_inv = nu;
+  const double eps_sig = o->eps_sig * r->diagonal;
+  size_t m = 0;
+  for (size_t k = 0; k < r->n; k++) {
+    local[k] = SIZE_MAX;
+    if (morse_in_loss(o, &r->pairs[k].p, eps_sig, r->voxel_size)) { local[k] = m; t->lp[m++] = k; }
+  }
+  t->n_lp = m;
+  /* (the analysis gives ends only to pairs in the set; one outside would carry no weight) */
+  for (size_t e = 0; e < t->n_ends; e++) t->end_local[e] = local[t->end_pair[e] / 2];
   free(cur);
+  free(local);
+  t->derived = 1;
   return MGS_OK;
 }
 
@@ -215,31 +235,6 @@ static void scatter_rows(void *vp, size_t b, size_t e) {
   }
 }
 
-static mgs_status loss_set_build(topo_term *t, mgs_error *err) {
-  const mgs_morse_options *o = &t->ctx->o;
-  const mgs_morse_result *r = &t->ctx->r;
-  const double eps_sig = o->eps_sig * r->diagonal;
-  size_t *local = malloc((r->n + 1) * sizeof(size_t));
-  t->lp = malloc((r->n + 1) * sizeof(size_t));
-  t->end_local = malloc((t->n_ends + 1) * sizeof(size_t));
-  if (!local || !t->lp || !t->end_local) {
-    free(local);
-    free(t->lp); free(t->end_local);
-    t->lp = t->end_local = NULL; /* (so the next call builds again) */
-    return mgs_error_set(err, MGS_ERR_NOMEM, "topo loss: out of memory");
-  }
-  size_t m = 0;
-  for (size_t k = 0; k < r->n; k++) {
-    local[k] = SIZE_MAX;
-    if (morse_in_loss(o, &r->pairs[k].p, eps_sig, r->voxel_size)) { local[k] = m; t->lp[m++] = k; }
-  }
-  t->n_lp = m;
-  /* (the analysis gives ends only to pairs in the set; one outside would carry no weight) */
-  for (size_t e = 0; e < t->n_ends; e++) t->end_local[e] = local[t->end_pair[e] / 2];
-  free(local);
-  return MGS_OK;
-}
-
 /* Loss (unweighted) on the current model; with grad, adds beta * dL/dθ into it. */
 static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_gaussians *grad, double beta,
                             double *loss, double *short_pers, mgs_error *err) {
@@ -251,7 +246,7 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
   if (r->iteration == 0 || r->n == 0) return MGS_OK;
   mgs_status st = topo_prepare(t, g, it, err);
   if (st) return st;
-  if (!t->lp && (st = loss_set_build(t, err)) != MGS_OK) return st;
+  if (!t->derived && (st = lists_derive(t, err)) != MGS_OK) return st;
   const size_t nl = t->n_lp;
   mgs_diagram d;
   memset(&d, 0, sizeof d);
@@ -317,7 +312,6 @@ static mgs_status topo_eval(topo_term *t, const mgs_gaussians *g, int it, mgs_ga
     for (size_t e = 0; e < t->n_ends && st == MGS_OK; e++)
       if (est[e]) st = mgs_error_set(err, est[e], "topo loss: the gradient at a bar end is not finite");
     /* scatter: per Gaussian, its rows in ascending order (the same sums as a serial pass) */
-    if (st == MGS_OK && !t->inv_start) st = inverse_build(t, err);
     if (st == MGS_OK) {
       scatter_job sj = {t, grad};
       mgs_parallel_for(0, t->n_inv, 256, scatter_rows, &sj);

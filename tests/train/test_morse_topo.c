@@ -119,55 +119,76 @@ static void run(mgs_morse_topo kind) {
 static void eliminate(void) { run(MGS_MORSE_TOPO_ELIMINATE); }
 static void literal(void) { run(MGS_MORSE_TOPO_LITERAL); }
 
-/* One analysis of the scene (eliminate) and the term's gradient at its iteration, into gr. */
-static void term_gradient(mgs_gaussians *g, mgs_gaussians *gr, mgs_morse_ctx **c, mgs_term **t) {
+/* The scene, one analysis of it (eliminate) and the term's gradient at its iteration. */
+typedef struct grad_fixture {
+  mgs_gaussians *g, *gr;
+  mgs_morse_ctx *c;
+  mgs_term *t;
+} grad_fixture;
+
+static grad_fixture term_gradient(void) {
+  grad_fixture f = {scene(), NULL, NULL, NULL};
+  f.gr = mgs_gaussians_create(f.g->n, f.g->sh_degree);
   mgs_morse_options o;
   options(&o, MGS_MORSE_TOPO_ELIMINATE);
   mgs_error err;
-  CHECK_OK(mgs_morse_ctx_create(&o, NULL, c, &err), &err);
-  CHECK_OK(mgs_term_topo_create(*c, 1, t, &err), &err);
+  CHECK_OK(mgs_morse_ctx_create(&o, NULL, &f.c, &err), &err);
+  CHECK_OK(mgs_term_topo_create(f.c, 1, &f.t, &err), &err);
   mgs_term_step s;
   memset(&s, 0, sizeof s);
-  s.model = g; s.grad = gr; s.iteration = 1; s.iterations = 10;
-  zero(gr, g->n);
-  CHECK_OK((*t)->ops->model_grad((*t)->self, &s, &err), &err);
+  s.model = f.g; s.grad = f.gr; s.iteration = 1; s.iterations = 10;
+  zero(f.gr, f.g->n);
+  CHECK_OK(f.t->ops->model_grad(f.t->self, &s, &err), &err);
+  return f;
+}
+
+static void fixture_free(grad_fixture *f) {
+  mgs_term_destroy(f->t);
+  mgs_morse_ctx_unref(f->c);
+  mgs_gaussians_destroy(f->g);
+  mgs_gaussians_destroy(f->gr);
+}
+
+/* Central differences of the term's fixed-pairing loss along dir (per group; NULL: that
+   group stays), step h. */
+static double fd_along(const grad_fixture *f, double *const dir[MGS_PARAM_SH_DC], double h) {
+  mgs_gaussians *gp = mgs_gaussians_clone(f->g), *gm = mgs_gaussians_clone(f->g);
+  for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
+    if (!dir[k]) continue;
+    float *a = mgs_gaussians_group(gp, (mgs_param_group)k), *b = mgs_gaussians_group(gm, (mgs_param_group)k);
+    for (size_t i = 0; i < f->g->n * (size_t)mgs_param_dim((mgs_param_group)k); i++) {
+      a[i] += (float)(h * dir[k][i]);
+      b[i] -= (float)(h * dir[k][i]);
+    }
+  }
+  double Lp = 0, Lm = 0, P;
+  mgs_error err;
+  CHECK_OK(mgs_term_topo_eval(f->c, gp, &Lp, &P, &err), &err);
+  CHECK_OK(mgs_term_topo_eval(f->c, gm, &Lm, &P, &err), &err);
+  mgs_gaussians_destroy(gp);
+  mgs_gaussians_destroy(gm);
+  return (Lp - Lm) / (2 * h);
 }
 
 /* The term's gradient against central differences of its fixed-pairing loss along the
  * gradient direction (the directional derivative), on the mean, scale and opacity groups
  * together (rotation: group_fd below). */
 static void directional_fd(void) {
-  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
-  mgs_morse_ctx *c = NULL;
-  mgs_term *t = NULL;
-  mgs_error err;
-  term_gradient(g, gr, &c, &t);
-  double gg = 0;
+  grad_fixture f = term_gradient();
+  double gg = 0, *dir[MGS_PARAM_SH_DC] = {NULL};
   for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
     if (k == MGS_PARAM_ROT) continue;
-    float *d = mgs_gaussians_group(gr, (mgs_param_group)k);
-    for (size_t i = 0; i < g->n * (size_t)mgs_param_dim((mgs_param_group)k); i++) gg += (double)d[i] * d[i];
+    const size_t m = f.g->n * (size_t)mgs_param_dim((mgs_param_group)k);
+    const float *d = mgs_gaussians_group(f.gr, (mgs_param_group)k);
+    dir[k] = calloc(m, sizeof(double));
+    for (size_t i = 0; i < m; i++) { dir[k][i] = d[i]; gg += (double)d[i] * d[i]; }
   }
   CHECK(gg > 0);
-  const double h = 1e-3 / sqrt(gg);
-  double Lp, Lm, P;
-  mgs_gaussians *gp = mgs_gaussians_clone(g), *gm = mgs_gaussians_clone(g);
-  for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
-    if (k == MGS_PARAM_ROT) continue;
-    float *d = mgs_gaussians_group(gr, (mgs_param_group)k), *a = mgs_gaussians_group(gp, (mgs_param_group)k),
-          *b = mgs_gaussians_group(gm, (mgs_param_group)k);
-    for (size_t i = 0; i < g->n * (size_t)mgs_param_dim((mgs_param_group)k); i++) { a[i] += (float)(h * d[i]); b[i] -= (float)(h * d[i]); }
-  }
-  CHECK_OK(mgs_term_topo_eval(c, gp, &Lp, &P, &err), &err);
-  CHECK_OK(mgs_term_topo_eval(c, gm, &Lm, &P, &err), &err);
-  double fd = (Lp - Lm) / (2 * h);
+  double fd = fd_along(&f, dir, 1e-3 / sqrt(gg));
   fprintf(stderr, "directional derivative: analytic %.6g, central differences %.6g\n", gg, fd);
   CHECK(fabs(fd - gg) < 0.05 * gg);
-  mgs_gaussians_destroy(gp); mgs_gaussians_destroy(gm);
-  mgs_term_destroy(t);
-  mgs_morse_ctx_unref(c);
-  mgs_gaussians_destroy(g);
-  mgs_gaussians_destroy(gr);
+  for (int k = 0; k < MGS_PARAM_SH_DC; k++) free(dir[k]);
+  fixture_free(&f);
 }
 
 /* Per parameter group, the term's gradient against central differences of its fixed-pairing
@@ -175,43 +196,29 @@ static void directional_fd(void) {
  * gradient the term drops or scatters to the wrong rows gives a derivative the differences
  * do not see (the direction along the gradient itself cannot tell: it drops both sides). */
 static void group_fd(void) {
-  mgs_gaussians *g = scene(), *gr = mgs_gaussians_create(g->n, g->sh_degree);
-  mgs_morse_ctx *c = NULL;
-  mgs_term *t = NULL;
-  mgs_error err;
-  term_gradient(g, gr, &c, &t);
+  grad_fixture f = term_gradient();
   uint64_t rs = 12345;
   static const char *const names[] = {"mean", "log_scale", "rot", "opacity"};
   for (int k = 0; k < MGS_PARAM_SH_DC; k++) {
-    const size_t m = g->n * (size_t)mgs_param_dim((mgs_param_group)k);
-    const float *d = mgs_gaussians_group(gr, (mgs_param_group)k);
-    double *dir = calloc(m, sizeof(double)), a = 0, dmax = 0;
+    const size_t m = f.g->n * (size_t)mgs_param_dim((mgs_param_group)k);
+    const float *d = mgs_gaussians_group(f.gr, (mgs_param_group)k);
+    double *dir[MGS_PARAM_SH_DC] = {NULL}, a = 0, dmax = 0;
+    dir[k] = calloc(m, sizeof(double));
     for (size_t i = 0; i < m; i++) {
       rs = rs * 6364136223846793005ULL + 1442695040888963407ULL;
       double u = 0.5 + (double)(rs >> 11) / 9007199254740992.0;
-      dir[i] = d[i] > 0 ? u : d[i] < 0 ? -u : 0;
-      a += dir[i] * d[i];
+      dir[k][i] = d[i] > 0 ? u : d[i] < 0 ? -u : 0;
+      a += dir[k][i] * d[i];
       dmax = fmax(dmax, fabs(d[i]));
     }
     CHECK_MSG(a > 0, "the term gives group %s no gradient", names[k]);
     /* a step of at most 2e-4 per value (world units, log-scale, quaternion, logit) */
-    const double h = 2e-4;
-    mgs_gaussians *gp = mgs_gaussians_clone(g), *gm = mgs_gaussians_clone(g);
-    float *pp = mgs_gaussians_group(gp, (mgs_param_group)k), *pm = mgs_gaussians_group(gm, (mgs_param_group)k);
-    for (size_t i = 0; i < m; i++) { pp[i] += (float)(h * dir[i]); pm[i] -= (float)(h * dir[i]); }
-    double Lp, Lm, P;
-    CHECK_OK(mgs_term_topo_eval(c, gp, &Lp, &P, &err), &err);
-    CHECK_OK(mgs_term_topo_eval(c, gm, &Lm, &P, &err), &err);
-    double fd = (Lp - Lm) / (2 * h);
+    double fd = fd_along(&f, dir, 2e-4);
     fprintf(stderr, "group %-9s: analytic %.6g, central differences %.6g (largest gradient %.3g)\n", names[k], a, fd, dmax);
     CHECK_MSG(fabs(fd - a) < 0.05 * a, "group %s: analytic %g, central differences %g", names[k], a, fd);
-    mgs_gaussians_destroy(gp); mgs_gaussians_destroy(gm);
-    free(dir);
+    free(dir[k]);
   }
-  mgs_term_destroy(t);
-  mgs_morse_ctx_unref(c);
-  mgs_gaussians_destroy(g);
-  mgs_gaussians_destroy(gr);
+  fixture_free(&f);
 }
 
 /* A strategy that replaces every Gaussian (Mini-Splatting's reinitialisations) makes the
